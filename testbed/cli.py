@@ -1,0 +1,50 @@
+"""The ``camtask`` command line: a thin dispatcher over command modules.
+
+Each command lives in its own module under ``testbed/commands/`` and exposes
+``add_parser(subparsers)``, which registers an ``argparse`` sub-parser whose
+``func`` default is called with the parsed namespace and returns an exit code.
+Library code never reads argv; only this module does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: Command modules, in the order ``camtask --help`` lists them.
+COMMANDS = (
+    "testbed.commands.render",
+)
+
+
+class UsageError(Exception):
+    """A user mistake on the command line, printed as one line with exit code 2."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="camtask",
+        description="Rendered synthetic-sensor testbed for camera tasking and occupancy reasoning.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name in COMMANDS:
+        importlib.import_module(name).add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ValueError, UsageError, FileNotFoundError, FileExistsError) as exc:
+        print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"camtask {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
