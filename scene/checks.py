@@ -1,0 +1,92 @@
+"""Small validators used at every boundary of the package.
+
+Each ``check_*`` converts its input, checks shape and range, and raises
+``ValueError`` naming the parameter and what was expected. They never ``assert``.
+
+>>> check_positive("radius", 0.25)
+0.25
+>>> check_choice("backend", "egl", ("egl", "osmesa"))
+'egl'
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import numpy as np
+
+
+def check_choice(name: str, value: Any, valid: Iterable[str]) -> str:
+    """Return ``value`` if it is one of ``valid``, else raise listing the valid values."""
+    valid = tuple(valid)
+    if value not in valid:
+        raise ValueError(f"{name}: unknown value {value!r}; expected one of {', '.join(valid)}")
+    return value
+
+
+def check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
+    """Return ``value`` as a finite float > 0 (or >= 0 with ``allow_zero``)."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a number, got {value!r}") from None
+    if not np.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name}: expected a finite number {bound}, got {value!r}")
+    return x
+
+
+def check_int(name: str, value: Any, *, minimum: int | None = None) -> int:
+    """Return ``value`` as an int, optionally at least ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name}: expected an integer, got {value!r}")
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{name}: expected an integer >= {minimum}, got {value}")
+    return int(value)
+
+
+def check_array(name: str, value: Any, shape: tuple[int | None, ...], *, dtype=float) -> np.ndarray:
+    """Return ``value`` as a finite array of ``shape`` (``None`` matches any length).
+
+    >>> check_array("xy", [[1, 2]], (None, 2)).shape
+    (1, 2)
+    """
+    try:
+        arr = np.asarray(value, dtype=dtype)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected numbers of shape {_shape_text(shape)}") from None
+    if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape)):
+        raise ValueError(
+            f"{name}: expected shape {_shape_text(shape)}, got {tuple(arr.shape)}"
+        )
+    if np.issubdtype(arr.dtype, np.floating) and not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: expected finite numbers, got NaN or infinity")
+    return arr
+
+
+def check_mapping(name: str, value: Any, allowed: Iterable[str], required: Iterable[str] = ()) -> Mapping:
+    """Return ``value`` if it is a mapping with only ``allowed`` keys and all ``required``."""
+    if not isinstance(value, Mapping):
+        raise ValueError(f"{name}: expected a mapping, got {type(value).__name__}")
+    allowed = tuple(allowed)
+    unknown = [k for k in value if k not in allowed]
+    if unknown:
+        raise ValueError(
+            f"{name}: unknown key {unknown[0]!r}; expected keys among {', '.join(allowed)}"
+        )
+    missing = [k for k in required if k not in value]
+    if missing:
+        raise ValueError(f"{name}: missing key {missing[0]!r}")
+    return value
+
+
+def _shape_text(shape: tuple[int | None, ...]) -> str:
+    return "(" + ", ".join("n" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
+
+
+def readonly(arr: np.ndarray) -> np.ndarray:
+    """Return a read-only copy of ``arr`` (for frozen values)."""
+    out = np.array(arr, copy=True)
+    out.setflags(write=False)
+    return out

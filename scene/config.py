@@ -1,0 +1,288 @@
+"""Scenes from YAML: the room, its cameras, the people and the render settings.
+
+A scene file is parsed once with ``yaml.safe_load`` into a frozen, validated
+:class:`Scene`. Every error is one line naming the field and what was expected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import yaml
+
+from .camera import Camera, FloorCamera
+from .checks import check_array, check_choice, check_int, check_mapping, check_positive, readonly
+from .room import Room
+
+ASSETS = Path(__file__).resolve().parent.parent / "assets"
+BUILTIN_SCENES = ("lab", "circle")
+BACKENDS = ("egl", "osmesa")
+
+
+@dataclass(frozen=True, eq=False)
+class People:
+    """Who walks in the scene.
+
+    count : number of people
+    radius, height : metres (upright cylinders)
+    speed : metres per second (random-waypoint walking speed)
+    colours : (count, 3) uint8 clothing colours, RGB
+    positions : (count, 2) float metres, world frame, or None to drop them at random
+    """
+
+    count: int
+    radius: float
+    height: float
+    speed: float
+    colours: np.ndarray
+    positions: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """How frames are rendered and degraded (plain data; used by ``render/``).
+
+    backend : "egl" (default) or "osmesa" (fallback when EGL is unavailable)
+    noise_std : std of additive Gaussian sensor noise, 8-bit grey levels
+    gain_jitter : std of the per-frame, per-camera multiplicative illumination change
+    """
+
+    backend: str = "egl"
+    noise_std: float = 2.0
+    gain_jitter: float = 0.02
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A room, its cameras, the people in it, and how it is rendered.
+
+    cameras : tuple of :class:`Camera` (calibrated, the lab) or :class:`FloorCamera` (circle)
+    frame_rate : frames per second of the simulated network
+    uniform_sets : the paper's hand-picked uniform taskings, k -> camera numbers
+    """
+
+    name: str
+    room: Room
+    cameras: tuple
+    people: People
+    frame_rate: float = 7.5
+    render: RenderSettings = field(default_factory=RenderSettings)
+    uniform_sets: Mapping[int, tuple[int, ...]] = field(default_factory=dict)
+
+    @property
+    def dt(self) -> float:
+        """Time between frames, seconds."""
+        return 1.0 / self.frame_rate
+
+    @property
+    def is_calibrated(self) -> bool:
+        """True when every camera is a calibrated pinhole camera (renderable)."""
+        return all(isinstance(c, Camera) for c in self.cameras)
+
+    def floor_poses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Floor-plane poses for tasking: xy (n, 2) metres, yaw (n,) radians, fov (n,) radians."""
+        xy = np.array([c.xy for c in self.cameras], dtype=float)
+        yaw = np.array([c.yaw for c in self.cameras], dtype=float)
+        fov = np.array([c.fov for c in self.cameras], dtype=float)
+        return xy, yaw, fov
+
+    def uniform_indices(self) -> dict[int, tuple[int, ...]]:
+        """The uniform sets as 0-based camera indices, k -> indices."""
+        return {k: tuple(n - 1 for n in nums) for k, nums in self.uniform_sets.items()}
+
+    @staticmethod
+    def from_config(config: Any, *, source: str = "scene") -> "Scene":
+        """Build and validate a scene from a parsed YAML document."""
+        return _parse_scene(config, source)
+
+    @staticmethod
+    def from_yaml(path: str | Path) -> "Scene":
+        """Load a scene file."""
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"scene file not found: {path}")
+        text = path.read_text()
+        try:
+            config = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from None
+        return _parse_scene(config, str(path))
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """A built-in scene by name (``lab``, ``circle``) or a scene file by path.
+
+    >>> load_scene("lab").room.area > 38
+    True
+    """
+    if str(name_or_path) in BUILTIN_SCENES:
+        return Scene.from_yaml(scene_path(str(name_or_path)))
+    return Scene.from_yaml(name_or_path)
+
+
+def scene_path(name: str) -> Path:
+    """Path of a built-in scene file."""
+    check_choice("scene", name, BUILTIN_SCENES)
+    return ASSETS / "scenes" / f"{name}.yaml"
+
+
+def _parse_scene(config: Any, source: str) -> Scene:
+    if config is None:
+        raise ValueError(f"{source}: empty scene file; expected a mapping with room, cameras, people")
+    if not isinstance(config, Mapping):
+        raise ValueError(f"{source}: expected a mapping at the top level, got {type(config).__name__}")
+    check_mapping("scene", config, ("name", "frame_rate", "room", "cameras", "people", "render", "uniform_sets"),
+                  ("room", "cameras", "people"))
+    room = _parse_room(config["room"])
+    cameras = _parse_cameras(config["cameras"], room)
+    people = _parse_people(config["people"], room)
+    render = _parse_render(config.get("render", {}) or {})
+    uniform = _parse_uniform_sets(config.get("uniform_sets", {}) or {}, len(cameras))
+    return Scene(
+        name=str(config.get("name", Path(source).stem)),
+        room=room,
+        cameras=cameras,
+        people=people,
+        frame_rate=check_positive("frame_rate", config.get("frame_rate", 7.5)),
+        render=render,
+        uniform_sets=uniform,
+    )
+
+
+def _parse_room(cfg: Any) -> Room:
+    check_mapping("room", cfg, ("shape", "width", "depth", "radius", "height"), ("shape",))
+    shape = check_choice("room.shape", cfg["shape"], ("rectangle", "circle"))
+    if shape == "rectangle":
+        check_mapping("room", cfg, ("shape", "width", "depth", "height"), ("width", "depth", "height"))
+        return Room.rectangle(cfg["width"], cfg["depth"], cfg["height"])
+    check_mapping("room", cfg, ("shape", "radius", "height"), ("radius",))
+    return Room.circle(cfg["radius"], cfg.get("height", 2.5))
+
+
+def _parse_cameras(cfg: Any, room: Room) -> tuple:
+    check_mapping("cameras", cfg, ("intrinsics", "poses", "ring"))
+    if "ring" in cfg:
+        return _parse_ring(cfg["ring"], room)
+    check_mapping("cameras", cfg, ("intrinsics", "poses"), ("intrinsics", "poses"))
+    intr = check_mapping("cameras.intrinsics", cfg["intrinsics"],
+                         ("resolution", "hfov_deg", "principal", "distortion"),
+                         ("resolution", "hfov_deg", "distortion"))
+    res = intr["resolution"]
+    if not (isinstance(res, (list, tuple)) and len(res) == 2):
+        raise ValueError(f"cameras.intrinsics.resolution: expected [width, height], got {res!r}")
+    width = check_int("cameras.intrinsics.resolution", res[0], minimum=1)
+    height = check_int("cameras.intrinsics.resolution", res[1], minimum=1)
+    hfov = _check_fov("cameras.intrinsics.hfov_deg", intr["hfov_deg"], maximum=179.0)
+    dist = check_array("cameras.intrinsics.distortion", intr["distortion"], (5,))
+    principal = intr.get("principal")
+    if principal is not None:
+        principal = check_array("cameras.intrinsics.principal", principal, (2,))
+    poses = cfg["poses"]
+    if not isinstance(poses, list) or not poses:
+        raise ValueError("cameras.poses: expected a non-empty list of camera poses")
+    cameras = []
+    for i, pose in enumerate(poses):
+        where = f"cameras.poses[{i}]"
+        check_mapping(where, pose, ("number", "position", "yaw_deg", "pitch_deg"),
+                      ("number", "position", "yaw_deg", "pitch_deg"))
+        pos = check_array(f"{where}.position", pose["position"], (3,))
+        if not room.contains_point(pos[:2]) or not 0 < pos[2] < room.height:
+            raise ValueError(f"{where}.position: camera {pose['number']} at {pos.tolist()} is outside the room")
+        cameras.append(Camera.from_pose(
+            check_int(f"{where}.number", pose["number"], minimum=1), pos,
+            np.radians(float(pose["yaw_deg"])), np.radians(float(pose["pitch_deg"])),
+            width, height, hfov, dist, principal))
+    _check_numbers(cameras)
+    return tuple(cameras)
+
+
+def _parse_ring(cfg: Any, room: Room) -> tuple:
+    check_mapping("cameras.ring", cfg, ("count", "fov_deg"), ("count", "fov_deg"))
+    if room.kind != "circle":
+        raise ValueError("cameras.ring: a ring of cameras needs a circular room")
+    n = check_int("cameras.ring.count", cfg["count"], minimum=1)
+    fov = _check_fov("cameras.ring.fov_deg", cfg["fov_deg"], maximum=180.0)
+    radius = float(np.max(np.linalg.norm(room.vertices, axis=1)))
+    angles = 2 * np.pi * np.arange(n) / n
+    return tuple(
+        FloorCamera(i + 1, radius * np.array([np.cos(a), np.sin(a)]), float(np.arctan2(-np.sin(a), -np.cos(a))), fov)
+        for i, a in enumerate(angles)
+    )
+
+
+def _check_fov(name: str, value: Any, maximum: float) -> float:
+    deg = check_positive(name, value) if not isinstance(value, bool) else None
+    if deg is None or deg > maximum:
+        raise ValueError(f"{name}: expected a field of view in (0, {maximum:g}] degrees, got {value!r}")
+    return float(np.radians(deg))
+
+
+def _check_numbers(cameras) -> None:
+    numbers = sorted(c.number for c in cameras)
+    if numbers != list(range(1, len(cameras) + 1)):
+        raise ValueError(f"cameras.poses: expected camera numbers 1..{len(cameras)} once each, got {numbers}")
+
+
+def _parse_people(cfg: Any, room: Room) -> People:
+    check_mapping("people", cfg, ("count", "radius", "height", "speed", "colours", "positions"), ("count", "radius"))
+    count = check_int("people.count", cfg["count"], minimum=0)
+    radius = check_positive("people.radius", cfg["radius"])
+    height = check_positive("people.height", cfg.get("height", 1.75))
+    speed = check_positive("people.speed", cfg.get("speed", 1.0))
+    colours = cfg.get("colours")
+    if colours is None:
+        colours = default_colours(count)
+    colours = check_array("people.colours", colours, (None, 3))
+    if len(colours) < count or np.any(colours < 0) or np.any(colours > 255):
+        raise ValueError(f"people.colours: expected at least {count} RGB triples in 0..255")
+    positions = cfg.get("positions")
+    if positions is not None:
+        positions = check_array("people.positions", positions, (count, 2))
+        check_people_fit(positions, radius, room)
+        positions = readonly(positions)
+    return People(count, radius, height, speed, readonly(colours[:count].astype(np.uint8)), positions)
+
+
+def check_people_fit(positions: np.ndarray, radius: float, room: Room) -> None:
+    """Raise if a person overlaps a wall or another person (positions (m, 2) metres)."""
+    for i, p in enumerate(positions):
+        if not room.contains_disc(p, radius):
+            raise ValueError(f"people.positions[{i}]: person at {p.tolist()} overlaps a wall or is outside the room")
+    if len(positions) > 1:
+        d = np.linalg.norm(positions[:, None] - positions[None], axis=-1)
+        i, j = np.triu_indices(len(positions), 1)
+        bad = np.flatnonzero(d[i, j] < 2 * radius)
+        if bad.size:
+            raise ValueError(f"people.positions[{j[bad[0]]}]: person overlaps person {i[bad[0]]}")
+
+
+def default_colours(count: int) -> np.ndarray:
+    """Distinct, saturated clothing colours, (count, 3) uint8 RGB."""
+    palette = np.array([[200, 30, 30], [30, 70, 200], [30, 160, 50], [230, 170, 20], [150, 40, 170],
+                        [20, 170, 180], [240, 110, 20], [110, 60, 20], [230, 60, 150], [90, 90, 90]])
+    return palette[np.arange(count) % len(palette)]
+
+
+def _parse_render(cfg: Any) -> RenderSettings:
+    check_mapping("render", cfg, ("backend", "noise_std", "gain_jitter"))
+    return RenderSettings(
+        backend=check_choice("render.backend", cfg.get("backend", "egl"), BACKENDS),
+        noise_std=check_positive("render.noise_std", cfg.get("noise_std", 2.0), allow_zero=True),
+        gain_jitter=check_positive("render.gain_jitter", cfg.get("gain_jitter", 0.02), allow_zero=True),
+    )
+
+
+def _parse_uniform_sets(cfg: Any, n_cameras: int) -> dict[int, tuple[int, ...]]:
+    if not isinstance(cfg, Mapping):
+        raise ValueError("uniform_sets: expected a mapping k -> list of camera numbers")
+    out = {}
+    for k, nums in cfg.items():
+        k = check_int("uniform_sets key", k, minimum=1)
+        nums = tuple(int(n) for n in nums)
+        if len(nums) != k or len(set(nums)) != k or not all(1 <= n <= n_cameras for n in nums):
+            raise ValueError(f"uniform_sets[{k}]: expected {k} distinct camera numbers in 1..{n_cameras}")
+        out[k] = tuple(sorted(nums))
+    return out
