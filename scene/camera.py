@@ -38,7 +38,7 @@ def intrinsics_from_fov(width: int, height: int, hfov: float, principal=None) ->
     """Camera matrix K (3, 3), pixels, for square pixels and horizontal field of view ``hfov``.
 
     >>> K = intrinsics_from_fov(640, 480, np.radians(90))
-    >>> float(K[0, 0])
+    >>> round(float(K[0, 0]), 6)
     320.0
     """
     f = (width / 2.0) / np.tan(hfov / 2.0)

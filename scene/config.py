@@ -214,8 +214,11 @@ def _parse_ring(cfg: Any, room: Room) -> tuple:
 
 
 def _check_fov(name: str, value: Any, maximum: float) -> float:
-    deg = check_positive(name, value) if not isinstance(value, bool) else None
-    if deg is None or deg > maximum:
+    try:
+        deg = None if isinstance(value, bool) else float(value)
+    except (TypeError, ValueError):
+        deg = None
+    if deg is None or not 0 < deg <= maximum:
         raise ValueError(f"{name}: expected a field of view in (0, {maximum:g}] degrees, got {value!r}")
     return float(np.radians(deg))
 

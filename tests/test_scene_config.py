@@ -1,0 +1,141 @@
+"""Scene files: the built-in scenes load, and bad input gets one-line errors."""
+
+import copy
+
+import cv2
+import numpy as np
+import pytest
+import yaml
+
+from scene import Camera, Scene, load_scene, rotation_from_yaw_pitch, scene_path
+
+
+@pytest.fixture(scope="module")
+def lab_config():
+    return yaml.safe_load(scene_path("lab").read_text())
+
+
+def test_lab_has_sixteen_calibrated_cameras():
+    lab = load_scene("lab")
+    assert lab.is_calibrated and len(lab.cameras) == 16
+    assert [c.number for c in lab.cameras] == list(range(1, 17))
+    assert lab.room.area == pytest.approx(6.7056 * 5.7912)
+    for cam in lab.cameras:
+        assert (cam.width, cam.height) == (640, 480)
+        assert np.degrees(cam.hfov) == pytest.approx(49.0, abs=0.1)
+        assert cam.dist[0] != 0 and cam.dist[1] != 0
+        assert 0 < np.degrees(cam.pitch) < 30
+        assert lab.room.contains_point(cam.xy)
+
+
+def test_lab_cameras_look_inward_and_odd_cameras_spread_evenly():
+    lab = load_scene("lab")
+    centre = np.array([6.7056, 5.7912]) / 2
+    for cam in lab.cameras:
+        to_centre = centre - cam.xy
+        bearing = np.arctan2(to_centre[1], to_centre[0])
+        assert abs(np.angle(np.exp(1j * (bearing - cam.yaw)))) < np.radians(24.5)
+    odd = np.array([lab.cameras[i].xy for i in range(0, 16, 2)])
+    walls = {tuple(np.round(p, 1) == 0.1) for p in odd}
+    assert len(odd) == 8 and len(walls) >= 2
+    assert lab.uniform_indices()[8] == tuple(range(0, 16, 2))
+    assert lab.uniform_sets[6] == (1, 3, 7, 11, 13, 15)
+    assert lab.uniform_sets[10] == (1, 3, 5, 7, 8, 9, 11, 13, 15, 16)
+
+
+def test_circle_scene_is_the_papers_simulation():
+    circle = load_scene("circle")
+    xy, yaw, fov = circle.floor_poses()
+    assert xy.shape == (16, 2) and np.allclose(np.linalg.norm(xy, axis=1), 1.0)
+    assert np.allclose(fov, np.pi)
+    # every camera looks at the centre
+    assert np.allclose(np.cos(yaw) * -xy[:, 0] + np.sin(yaw) * -xy[:, 1], 1.0)
+    assert circle.people.radius == 0.1 and circle.people.count == 5
+
+
+def test_calibration_projects_like_opencv():
+    cam = load_scene("lab").cameras[0]
+    point = cam.center_world + 3.0 * np.array([np.cos(cam.yaw), np.sin(cam.yaw), 0.0])
+    rvec, _ = cv2.Rodrigues(cam.R)
+    uv, _ = cv2.projectPoints(point[None], rvec, cam.t, cam.K, cam.dist)
+    u, v = uv[0, 0]
+    # a point straight ahead at eye level is on the centre column, above the centre row
+    assert abs(u - cam.K[0, 2]) < 1.0 and v < cam.K[1, 2]
+
+
+def test_rotation_is_orthonormal():
+    R = rotation_from_yaw_pitch(0.7, 0.3)
+    assert np.allclose(R @ R.T, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)
+
+
+def test_frozen_and_read_only():
+    cam = load_scene("lab").cameras[0]
+    with pytest.raises(Exception):
+        cam.number = 3
+    with pytest.raises(ValueError):
+        cam.K[0, 0] = 1.0
+
+
+def _set(config, path, value):
+    c = copy.deepcopy(config)
+    node = c
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    return c
+
+
+@pytest.mark.parametrize("path, value, match", [
+    (("bogus",), 1, "scene: unknown key 'bogus'"),
+    (("room", "colour"), "red", "room: unknown key 'colour'"),
+    (("room", "width"), -1, r"room.width: expected a finite number > 0"),
+    (("room", "height"), 0, r"room.height: expected a finite number > 0"),
+    (("people", "radius"), 0, r"people.radius: expected a finite number > 0"),
+    (("people", "count"), -2, r"people.count: expected an integer >= 0"),
+    (("cameras", "intrinsics", "hfov_deg"), 0, r"hfov_deg: expected a field of view in \(0, 179\]"),
+    (("cameras", "intrinsics", "hfov_deg"), 200, r"hfov_deg: expected a field of view"),
+    (("cameras", "intrinsics", "resolution"), [0, 480], r"resolution: expected an integer >= 1"),
+    (("cameras", "intrinsics", "resolution"), [640], r"resolution: expected \[width, height\]"),
+    (("cameras", "intrinsics", "distortion"), [0.1, 0.2], r"distortion: expected shape \(5,\)"),
+    (("render", "backend"), "vulkan", "render.backend: unknown value 'vulkan'; expected one of egl, osmesa"),
+    (("uniform_sets",), {6: [1, 2, 3]}, r"uniform_sets\[6\]: expected 6 distinct camera numbers"),
+])
+def test_bad_scene_fields(lab_config, path, value, match):
+    with pytest.raises(ValueError, match=match):
+        Scene.from_config(_set(lab_config, path, value))
+
+
+def test_camera_outside_the_room(lab_config):
+    poses = copy.deepcopy(lab_config["cameras"]["poses"])
+    poses[3]["position"] = [9.0, 1.0, 2.2]
+    with pytest.raises(ValueError, match=r"poses\[3\].position: camera 4 .* is outside the room"):
+        Scene.from_config(_set(lab_config, ("cameras", "poses"), poses))
+    poses[3]["position"] = [3.0, 1.0, 3.5]
+    with pytest.raises(ValueError, match="outside the room"):
+        Scene.from_config(_set(lab_config, ("cameras", "poses"), poses))
+
+
+def test_people_overlapping_wall_or_each_other(lab_config):
+    with pytest.raises(ValueError, match=r"people.positions\[1\]: person at .* overlaps a wall"):
+        Scene.from_config(_set(lab_config, ("people", "positions"), [[2, 2], [0.1, 3], [4, 4]]))
+    with pytest.raises(ValueError, match=r"people.positions\[2\]: person overlaps person 0"):
+        Scene.from_config(_set(lab_config, ("people", "positions"), [[2, 2], [4, 4], [2.3, 2.1]]))
+
+
+@pytest.mark.parametrize("text, match", [
+    ("", "empty scene file"),
+    ("- 1\n- 2\n", "expected a mapping at the top level, got list"),
+    ("room: [1, 2\n", "not valid YAML"),
+])
+def test_bad_documents(tmp_path, text, match):
+    path = tmp_path / "s.yaml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=match):
+        Scene.from_yaml(path)
+
+
+def test_missing_file_and_camera_validation(tmp_path):
+    with pytest.raises(FileNotFoundError, match="scene file not found"):
+        load_scene(tmp_path / "nope.yaml")
+    with pytest.raises(ValueError, match="camera.R: expected a rotation matrix"):
+        Camera(1, np.eye(3), np.zeros(5), 2 * np.eye(3), np.zeros(3), 640, 480)
