@@ -1,0 +1,79 @@
+"""The hull-centre tracker and its ground-truth metrics."""
+
+import numpy as np
+import pytest
+
+from tasking.track_metrics import tracking_metrics
+from tasking.tracker import Tracker, TrackerParams
+
+
+def _walk(n_frames, dt, starts, velocities):
+    t = np.arange(n_frames)[:, None, None] * dt
+    return np.asarray(starts)[None] + t * np.asarray(velocities)[None]
+
+
+def test_two_objects_keep_their_ids_and_positions():
+    params = TrackerParams(dt=0.1)
+    truth = _walk(40, 0.1, [[0.0, 0.0], [2.0, 1.0]], [[0.5, 0.2], [-0.3, 0.4]])
+    rng = np.random.default_rng(0)
+    tracker = Tracker(params)
+    seen = {}
+    for t, xy in enumerate(truth):
+        ids, est = tracker.step(xy + rng.normal(0, 0.02, xy.shape))
+        for i, p in zip(ids, est):
+            obj = int(np.argmin(np.linalg.norm(xy - p, axis=1)))
+            seen.setdefault(int(i), set()).add(obj)
+            assert np.linalg.norm(xy[obj] - p) < 0.1
+    assert len(seen) == 2 and all(len(v) == 1 for v in seen.values())
+
+
+def test_phantoms_without_temporal_support_are_never_confirmed():
+    rng = np.random.default_rng(1)
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=3))
+    real = np.array([[1.0, 1.0]])
+    for _ in range(30):
+        phantom = rng.uniform(2, 6, (1, 2))  # a different place every frame
+        ids, est = tracker.step(np.vstack([real, phantom]))
+        assert len(ids) <= 1
+    assert len(ids) == 1 and np.allclose(est, real, atol=0.05)
+    assert len(tracker.estimates()) == 1
+
+
+def test_a_track_survives_a_short_gap_and_ends_after_max_missed():
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=2, max_missed=3))
+    for t in range(5):
+        ids, _ = tracker.step([[0.1 * t, 0.0]])
+    first = ids.tolist()
+    tracker.step(np.zeros((0, 2)))
+    ids, est = tracker.step([[0.6, 0.0]])
+    assert ids.tolist() == first and np.allclose(est, [[0.6, 0.0]], atol=0.05)
+    for _ in range(3):
+        tracker.step(np.zeros((0, 2)))
+    assert len(tracker.ids) == 0
+
+
+def test_bad_parameters():
+    with pytest.raises(ValueError, match="tracker.gate: expected a finite number > 0"):
+        TrackerParams(gate=0)
+    with pytest.raises(ValueError, match="tracker.confirm_hits: expected an integer >= 1"):
+        TrackerParams(confirm_hits=0)
+    with pytest.raises(ValueError, match=r"detections: expected shape \(n, 2\), got \(3,\)"):
+        Tracker().step([1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="detections: expected finite numbers"):
+        Tracker().step(np.full((1, 2), np.nan))
+
+
+def test_metrics_on_a_hand_computed_case():
+    truth_ids = [[0, 1], [0, 1], [0, 1]]
+    truth_xy = [[[0, 0], [1, 0]]] * 3
+    # frame 0: both matched (errors 0.1 and 0.2); frame 1: object 1 missed;
+    # frame 2: a false track far away as well
+    track_ids = [[7, 8], [7], [7, 8, 9]]
+    track_xy = [[[0.1, 0], [1.2, 0]], [[0.1, 0]], [[0.1, 0], [1.2, 0], [5, 5]]]
+    m = tracking_metrics(truth_ids, truth_xy, track_ids, track_xy, max_distance=0.5)
+    assert m["matches"] == 5
+    assert m["mse"] == pytest.approx((3 * 0.01 + 2 * 0.04) / 5)
+    assert m["motp"] == pytest.approx((3 * 0.1 + 2 * 0.2) / 5)
+    assert m["mota"] == pytest.approx(1 - (1 + 1) / 6)   # one miss, one false positive
+    with pytest.raises(ValueError, match="same number of frames"):
+        tracking_metrics(truth_ids, truth_xy, track_ids[:2], track_xy, 0.5)
