@@ -1,0 +1,34 @@
+"""Pure-geometry occupancy core: scanlines or discs -> cones -> visual hull -> taskers.
+
+Imports only numpy, scipy, shapely and scikit-learn; never a GL library.
+"""
+
+from .checks import check_choice
+from .hull import (
+    camera_regions_from_discs,
+    camera_regions_from_scanlines,
+    empty_regions_from_discs,
+    empty_regions_from_scanlines,
+    free_wedges_from_discs,
+    free_wedges_from_scanlines,
+    hull_from_wedges,
+    polygon_centres,
+    prune_small,
+    visual_hull_of_discs,
+    visual_hull_of_scanlines,
+)
+
+__all__ = [
+    "check_choice",
+    "camera_regions_from_discs",
+    "camera_regions_from_scanlines",
+    "empty_regions_from_discs",
+    "empty_regions_from_scanlines",
+    "free_wedges_from_discs",
+    "free_wedges_from_scanlines",
+    "hull_from_wedges",
+    "polygon_centres",
+    "prune_small",
+    "visual_hull_of_discs",
+    "visual_hull_of_scanlines",
+]

@@ -1,0 +1,289 @@
+"""Visual hulls on the floor plane, from object discs or from binary scanlines.
+
+A camera proves *empty* every point of the room that lies inside its field of view and
+outside all of its occluded cones: the union of its free wedges (:mod:`tasking.cones`).
+The visual hull of a camera set ``S`` is the room minus the union of the empty regions
+of the cameras in ``S``; equivalently the room intersected with each camera's "not
+proven empty" region. A point outside a camera's field of view is not constrained by
+that camera, so the hull always contains every object.
+
+>>> from shapely.geometry import Point
+>>> room = Point(0, 0).buffer(1.0, quad_segs=64)
+>>> hull = visual_hull_of_discs([[-1, 0], [0, -1]], [0, np.pi / 2], np.pi,
+...                             [[0, 0]], 0.1, room)
+>>> round(hull.area, 4)  # two crossing tangent cones: a kite just larger than 0.2 x 0.2
+0.0404
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+from shapely.geometry import MultiPolygon, Polygon
+from shapely.geometry.base import BaseGeometry
+
+from . import cones
+from .checks import (
+    check_angles,
+    check_cameras_outside_discs,
+    check_discs_disjoint,
+    check_discs_in_room,
+    check_fov,
+    check_points,
+    check_radii,
+    check_room,
+)
+
+#: Hull parts smaller than this fraction of the room's area are rounding noise.
+SLIVER = 1e-12
+
+__all__ = [
+    "SLIVER",
+    "drop_slivers",
+    "free_wedges_from_discs",
+    "free_wedges_from_scanlines",
+    "empty_regions_from_discs",
+    "empty_regions_from_scanlines",
+    "camera_regions_from_discs",
+    "camera_regions_from_scanlines",
+    "hull_from_wedges",
+    "visual_hull_of_discs",
+    "visual_hull_of_scanlines",
+    "prune_small",
+    "polygon_centres",
+]
+
+
+def free_wedges_from_discs(
+    camera_xy, camera_yaw, fov, centers, radii, room, *, strict: bool = True
+) -> np.ndarray:
+    """Per-camera union of free wedges (not clipped to the room), from object discs.
+
+    Parameters
+    ----------
+    camera_xy : (n, 2) float, metres, world frame
+    camera_yaw : (n,) float, radians, world frame viewing direction
+    fov : float or (n,) float, radians, in (0, 2*pi)
+    centers : (m, 2) float, metres, world frame (m may be 0)
+    radii : float or (m,) float, metres
+    room : shapely Polygon
+    strict : bool
+        Validate the objects as real ones (disjoint, inside the room, no camera inside).
+        Estimated discs (``strict=False``) may overlap; a camera inside one is blind.
+
+    Returns
+    -------
+    (n,) object array of MultiPolygons, world frame: what each camera proves empty
+    (intersect with ``room`` for the empty region proper).
+    """
+    room = check_room(room)
+    camera_xy = check_points("camera_xy", camera_xy)
+    n = camera_xy.shape[0]
+    camera_yaw = check_angles("camera_yaw", camera_yaw, n)
+    fov = check_fov(fov, n)
+    centers = check_points("centers", centers, allow_empty=True)
+    radii = check_radii("radii", radii, centers.shape[0])
+    if strict:
+        check_discs_disjoint(centers, radii)
+        check_discs_in_room(centers, room)
+        check_cameras_outside_discs(camera_xy, centers, radii)
+    half = 0.5 * fov
+    lo, hi = cones.disc_intervals(camera_xy, camera_yaw, centers, radii)
+    lo, hi = cones.clip_to_fov(lo, hi, half)
+    return _wedges(camera_xy, camera_yaw, half, lo, hi, room)
+
+
+def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room) -> np.ndarray:
+    """Per-camera union of free wedges (not clipped to the room), from scanlines.
+
+    Parameters
+    ----------
+    camera_xy : (n, 2) float, metres, world frame
+    bearings : (n, W) float, radians, world-frame bearing of each column's vertical
+        plane; strictly monotone along each row (either direction), W >= 2
+    scanlines : (n, W) bool, True = occupied column
+    room : shapely Polygon
+
+    Returns
+    -------
+    (n,) object array of MultiPolygons, as :func:`free_wedges_from_discs`.
+    """
+    room = check_room(room)
+    camera_xy = check_points("camera_xy", camera_xy)
+    n = camera_xy.shape[0]
+    bearings = np.asarray(bearings, dtype=float)
+    scanlines = np.asarray(scanlines)
+    if bearings.ndim != 2 or bearings.shape[0] != n or bearings.shape[1] < 2:
+        raise ValueError(f"bearings must have shape ({n}, W) with W >= 2; got {bearings.shape}")
+    if scanlines.shape != bearings.shape:
+        raise ValueError(
+            f"scanlines must have the shape of bearings {bearings.shape}; got {scanlines.shape}"
+        )
+    if scanlines.dtype != bool:
+        raise ValueError(f"scanlines must be a bool array; got dtype {scanlines.dtype}")
+    if not np.all(np.isfinite(bearings)):
+        raise ValueError("bearings must be finite (no NaN or inf)")
+    step = np.diff(np.unwrap(bearings, axis=1), axis=1)
+    monotone = np.all(step > 0, axis=1) | np.all(step < 0, axis=1)
+    if not np.all(monotone):
+        bad = int(np.flatnonzero(~monotone)[0])
+        raise ValueError(f"bearings must be strictly monotone along each row (row {bad})")
+    yaw, fov, lo, hi = cones.scanline_intervals(bearings, scanlines)
+    if np.any(fov >= 2 * np.pi):
+        raise ValueError("bearings: the columns of a camera must span less than 2*pi")
+    return _wedges(camera_xy, yaw, 0.5 * fov, lo, hi, room)
+
+
+def _wedges(camera_xy, yaw, half, lo, hi, room) -> np.ndarray:
+    camera, a0, a1 = cones.free_intervals(lo, hi, half)
+    radius = cones.wedge_radius(room, camera_xy)
+    polys = cones.wedge_polygons(camera_xy[camera], yaw[camera] + a0, yaw[camera] + a1, radius)
+    return cones.group_by_camera(polys, camera, camera_xy.shape[0])
+
+
+def hull_from_wedges(wedges, room: Polygon, subset=None) -> BaseGeometry:
+    """Visual hull: the room minus the union of the chosen cameras' free wedges.
+
+    Parameters
+    ----------
+    wedges : (n,) object array of MultiPolygons (from ``free_wedges_*``)
+    room : shapely Polygon
+    subset : optional sequence of 0-based camera indices; default all cameras
+
+    Returns
+    -------
+    shapely geometry (Polygon, MultiPolygon or GeometryCollection), before pruning.
+    """
+    w = np.asarray(wedges, dtype=object)
+    if subset is not None:
+        w = w[np.asarray(subset, dtype=np.intp)]
+    if w.size == 0:
+        return room
+    return drop_slivers(room.difference(shapely.union_all(w)), room)
+
+
+def drop_slivers(geom: BaseGeometry, room: Polygon) -> BaseGeometry:
+    """Drop numerical slivers: parts with area <= ``SLIVER * room.area``.
+
+    A free wedge whose edge runs along a wall (a 180-degree camera on the boundary)
+    leaves zero-area polygons of rounding noise along that wall. They are not objects,
+    not phantoms, and far below any ``prune_small`` threshold.
+    """
+    eps = SLIVER * room.area
+    if isinstance(geom, Polygon):
+        return geom if geom.area > eps else Polygon()
+    parts = shapely.get_parts(geom)
+    keep = parts[shapely.area(parts) > eps]
+    if keep.size == parts.size:
+        return geom
+    if keep.size == 1:
+        return keep[0]
+    return MultiPolygon(list(keep))
+
+
+def empty_regions_from_discs(camera_xy, camera_yaw, fov, centers, radii, room) -> list:
+    """Per-camera region proven empty (free wedges clipped to the room), from discs.
+
+    Same parameters as :func:`visual_hull_of_discs`; returns a list of n geometries.
+    """
+    w = free_wedges_from_discs(camera_xy, camera_yaw, fov, centers, radii, room)
+    return list(shapely.intersection(w, room))
+
+
+def empty_regions_from_scanlines(camera_xy, bearings, scanlines, room) -> list:
+    """Per-camera region proven empty, from scanlines; a list of n geometries."""
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room)
+    return list(shapely.intersection(w, room))
+
+
+def camera_regions_from_discs(camera_xy, camera_yaw, fov, centers, radii, room) -> list:
+    """Per-camera "not proven empty" regions, from discs.
+
+    ``hull(S) == room ∩ ⋂_{c in S} regions[c]``. Same parameters as
+    :func:`visual_hull_of_discs`; returns a list of n geometries inside the room.
+    """
+    w = free_wedges_from_discs(camera_xy, camera_yaw, fov, centers, radii, room)
+    return [drop_slivers(g, room) for g in shapely.difference(room, w)]
+
+
+def camera_regions_from_scanlines(camera_xy, bearings, scanlines, room) -> list:
+    """Per-camera "not proven empty" regions, from scanlines; a list of n geometries."""
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room)
+    return [drop_slivers(g, room) for g in shapely.difference(room, w)]
+
+
+def visual_hull_of_discs(camera_xy, camera_yaw, fov, centers, radii, room) -> BaseGeometry:
+    """Visual hull of disc objects seen by cameras with a field of view.
+
+    Parameters
+    ----------
+    camera_xy : (n, 2) float, metres, world frame
+    camera_yaw : (n,) float, radians, world-frame viewing direction
+    fov : float or (n,) float, radians, in (0, 2*pi)
+    centers : (m, 2) float, metres, world frame; disjoint discs inside the room
+    radii : float or (m,) float, metres
+    room : shapely Polygon
+
+    Returns
+    -------
+    shapely geometry, the hull before small-polygon removal (see :func:`prune_small`).
+    """
+    w = free_wedges_from_discs(camera_xy, camera_yaw, fov, centers, radii, room)
+    return hull_from_wedges(w, room)
+
+
+def visual_hull_of_scanlines(camera_xy, bearings, scanlines, room) -> BaseGeometry:
+    """Visual hull from binary scanlines.
+
+    Parameters
+    ----------
+    camera_xy : (n, 2) float, metres, world frame
+    bearings : (n, W) float, radians, world-frame bearing of each column's vertical
+        plane, strictly monotone along each row; a column covers half a column step
+        either side, so the field of view is the span of the column edges
+    scanlines : (n, W) bool, True = occupied column
+    room : shapely Polygon
+
+    Returns
+    -------
+    shapely geometry, the hull before small-polygon removal.
+    """
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room)
+    return hull_from_wedges(w, room)
+
+
+def prune_small(hull: BaseGeometry, min_area: float) -> list[Polygon]:
+    """Polygons of ``hull`` with area >= ``min_area`` (m^2); lines and points dropped.
+
+    >>> from shapely.geometry import box
+    >>> [p.area for p in prune_small(box(0, 0, 1, 1).union(box(2, 0, 2.1, 0.1)), 0.5)]
+    [1.0]
+    """
+    min_area = float(min_area)
+    if not np.isfinite(min_area) or min_area < 0:
+        raise ValueError(f"min_area must be finite and >= 0; got {min_area}")
+    parts = shapely.get_parts(shapely.get_parts(np.array([hull], dtype=object)))
+    polys = [p for p in parts if isinstance(p, Polygon) and not p.is_empty]
+    polys.extend(q for p in parts if isinstance(p, MultiPolygon) for q in p.geoms)
+    return [p for p in polys if p.area >= min_area and p.area > 0]
+
+
+def polygon_centres(polygons) -> np.ndarray:
+    """Centroids of polygons.
+
+    Parameters
+    ----------
+    polygons : sequence of p shapely Polygons
+
+    Returns
+    -------
+    (p, 2) float, metres, world frame.
+
+    >>> from shapely.geometry import box
+    >>> polygon_centres([box(0, 0, 2, 2)]).tolist()
+    [[1.0, 1.0]]
+    """
+    polys = np.asarray(list(polygons), dtype=object)
+    if polys.size == 0:
+        return np.empty((0, 2))
+    return shapely.get_coordinates(shapely.centroid(polys)).reshape(-1, 2)

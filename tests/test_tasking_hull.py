@@ -1,0 +1,250 @@
+"""Visual hull geometry: hand-computable cases, hypothesis properties, error cases."""
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from shapely.geometry import GeometryCollection, LineString, Point, Polygon, box
+from test_tasking_common import circle_room, random_discs, ring_cameras, scanlines_from_discs
+
+from tasking import (
+    camera_regions_from_discs,
+    camera_regions_from_scanlines,
+    empty_regions_from_discs,
+    polygon_centres,
+    prune_small,
+    visual_hull_of_discs,
+    visual_hull_of_scanlines,
+)
+
+SQUARE = box(-1, -1, 1, 1)
+R = 0.1
+TAN = np.tan(np.arcsin(R / 1.0))  # half-angle asin(r / d) at d = 1
+
+
+def sym_diff_area(a, b):
+    return a.symmetric_difference(b).area
+
+
+# --- hand-computable cases ------------------------------------------------------------
+
+
+def test_one_disc_one_camera_is_the_tangent_wedge():
+    # camera on the left wall looking +x at a disc 1 m away: a triangle of height 2 whose
+    # half-angle is asin(r / d); area = 0.5 * 2 * (2 * 2 tan) = 4 tan.
+    hull = visual_hull_of_discs([[-1, 0]], [0.0], np.pi, [[0, 0]], R, SQUARE)
+    assert hull.area == pytest.approx(4 * TAN, rel=1e-12)
+    expected = Polygon([(-1, 0), (1, 2 * TAN), (1, -2 * TAN)])
+    assert sym_diff_area(hull, expected) < 1e-12
+    # its edges are tangent to the disc
+    assert hull.exterior.distance(Point(0, 0)) == pytest.approx(R, abs=1e-12)
+
+
+def test_two_opposite_cameras_give_a_rhombus():
+    hull = visual_hull_of_discs([[-1, 0], [1, 0]], [0.0, np.pi], np.pi, [[0, 0]], R, SQUARE)
+    expected = Polygon([(-1, 0), (0, TAN), (1, 0), (0, -TAN)])
+    assert hull.area == pytest.approx(2 * TAN, rel=1e-12)
+    assert sym_diff_area(hull, expected) < 1e-12
+
+
+def test_fov_missing_the_object_leaves_the_room_unconstrained_there():
+    half = np.radians(49) / 2
+    hull = visual_hull_of_discs([[0, -1]], [np.pi / 2], np.radians(49), [[0.8, 0.0]], R, SQUARE)
+    sector = Polygon([(0, -1), (2 * np.tan(half), 1), (-2 * np.tan(half), 1)])
+    assert hull.area == pytest.approx(4 - sector.area, rel=1e-12)
+    assert sym_diff_area(hull, SQUARE.difference(sector)) < 1e-12
+    assert hull.contains(Point(0.8, 0.0).buffer(R))
+
+
+def test_180_degree_camera_on_the_boundary_sees_a_half_plane():
+    # no objects at all: the camera proves its half of the room empty
+    hull = visual_hull_of_discs([[0, -1]], [0.0], np.pi, np.empty((0, 2)), R, SQUARE)
+    assert sym_diff_area(hull, box(-1, -1, 0, 1)) < 1e-12
+
+
+def test_overlapping_cones_of_one_camera_merge():
+    centres = np.array([[0.0, 0.0], [0.5, 0.03]])
+    hull = visual_hull_of_discs([[-1, 0]], [0.0], np.pi, centres, R, SQUARE)
+    far = 10.0
+
+    def cone(c):
+        d = np.hypot(c[0] + 1, c[1])
+        b, h = np.arctan2(c[1], c[0] + 1), np.arcsin(R / d)
+        return Polygon([(-1, 0), (-1 + far * np.cos(b - h), far * np.sin(b - h)),
+                        (-1 + far * np.cos(b + h), far * np.sin(b + h))])
+
+    expected = SQUARE.intersection(cone(centres[0]).union(cone(centres[1])))
+    assert sym_diff_area(hull, expected) < 1e-12
+    assert len(getattr(hull, "geoms", [hull])) == 1
+
+
+def test_camera_regions_intersect_to_the_hull():
+    room = circle_room()
+    xy, yaw = ring_cameras(6)
+    centres = random_discs(np.random.default_rng(1), 4)
+    regions = camera_regions_from_discs(xy, yaw, np.pi, centres, R, room)
+    hull = visual_hull_of_discs(xy, yaw, np.pi, centres, R, room)
+    assert len(regions) == 6
+    assert sym_diff_area(shapely.intersection_all([room, *regions]), hull) < 1e-10
+    empties = empty_regions_from_discs(xy, yaw, np.pi, centres, R, room)
+    assert sym_diff_area(room.difference(shapely.union_all(empties)), hull) < 1e-10
+
+
+def test_prune_small_and_centres():
+    geom = GeometryCollection(
+        [box(0, 0, 1, 1), box(2, 2, 2.1, 2.1), LineString([(5, 5), (6, 6)]), Point(9, 9)]
+    )
+    kept = prune_small(geom, 0.5)
+    assert [p.area for p in kept] == [1.0]
+    assert polygon_centres(kept).tolist() == [[0.5, 0.5]]
+    assert polygon_centres([]).shape == (0, 2)
+    assert len(prune_small(Polygon(), 0.0)) == 0
+
+
+# --- hypothesis properties ------------------------------------------------------------
+
+scenes = st.fixed_dictionaries(
+    {
+        "seed": st.integers(0, 2**32 - 1),
+        "n": st.integers(1, 10),
+        "m": st.integers(1, 6),
+        "fov": st.floats(0.3, 2 * np.pi - 0.3),
+        "inside": st.booleans(),
+    }
+)
+
+
+def build(scene):
+    """A random circular-room scene: cameras on the rim (or inside), random yaws."""
+    rng = np.random.default_rng(scene["seed"])
+    room = circle_room()
+    centres = random_discs(rng, scene["m"])
+    xy, yaw = ring_cameras(scene["n"], phase=rng.uniform(0, 2 * np.pi))
+    if scene["inside"]:  # cameras anywhere inside the room, clear of the objects
+        pts = []
+        while len(pts) < scene["n"]:
+            p = rng.uniform(-1, 1, 2)
+            if np.hypot(*p) < 1 and np.all(np.hypot(*(centres - p).T) > R + 0.01):
+                pts.append(p)
+        xy = np.array(pts)
+    yaw = yaw + rng.normal(0, 0.3, scene["n"])
+    return room, xy, yaw, scene["fov"], centres
+
+
+def object_union(centres, room):
+    return shapely.union_all([Point(c).buffer(R, quad_segs=32) for c in centres]).intersection(
+        room
+    )
+
+
+@settings(max_examples=40, deadline=None)
+@given(scenes)
+def test_hull_contains_every_object_and_is_at_least_their_area(scene):
+    room, xy, yaw, fov, centres = build(scene)
+    hull = visual_hull_of_discs(xy, yaw, fov, centres, R, room)
+    objects = object_union(centres, room)
+    assert objects.difference(hull).area < 1e-9
+    assert hull.area >= objects.area - 1e-9
+
+
+@settings(max_examples=30, deadline=None)
+@given(scenes, st.integers(0, 9))
+def test_adding_a_camera_never_grows_the_hull(scene, extra):
+    room, xy, yaw, fov, centres = build(scene)
+    n = xy.shape[0]
+    if n < 2:
+        return
+    drop = extra % n
+    keep = np.delete(np.arange(n), drop)
+    small = visual_hull_of_discs(xy[keep], yaw[keep], fov, centres, R, room)
+    full = visual_hull_of_discs(xy, yaw, fov, centres, R, room)
+    assert full.area <= small.area + 1e-12
+    assert full.difference(small).area < 1e-10
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(2, 8), st.integers(1, 5))
+def test_scanlines_agree_with_discs_at_fine_resolution(seed, n, m):
+    # Columns are marked occupied when they meet a cone, so the scanline hull contains
+    # the disc hull and every cone edge moves out by at most one column step (pi / W).
+    # Cone half-angles are >= asin(0.1 / 2) = 0.05 rad, so W = 3000 widens each cone by
+    # at most ~2 %; hull areas (intersections of such cones) agree within ~5 %.
+    rng = np.random.default_rng(seed)
+    room = circle_room()
+    centres = random_discs(rng, m)
+    xy, yaw = ring_cameras(n, phase=rng.uniform(0, 2 * np.pi))
+    disc_hull = visual_hull_of_discs(xy, yaw, np.pi, centres, R, room)
+    bearings, occ = scanlines_from_discs(xy, yaw, np.pi, centres, R, 3000)
+    scan_hull = visual_hull_of_scanlines(xy, bearings, occ, room)
+    assert disc_hull.difference(scan_hull).area < 1e-9
+    assert scan_hull.area == pytest.approx(disc_hull.area, rel=0.05)
+    # increasing bearings (columns reversed) and bearings wrapped to [-pi, pi) agree
+    wrapped = (bearings[:, ::-1] + np.pi) % (2 * np.pi) - np.pi
+    again = visual_hull_of_scanlines(xy, wrapped, occ[:, ::-1], room)
+    assert sym_diff_area(again, scan_hull) < 1e-10
+
+
+def test_scanline_hand_case_and_regions():
+    # one camera, 4 columns spanning [-pi/2, pi/2] around yaw 0; column 2 occupied:
+    # the occluded interval is [0, pi/4] -> the wedge between 0 and 45 degrees.
+    step = np.pi / 4
+    bearings = np.array([[-1.5, -0.5, 0.5, 1.5]]) * step
+    occ = np.array([[False, False, True, False]])
+    hull = visual_hull_of_scanlines([[-1, 0]], bearings, occ, SQUARE)
+    assert sym_diff_area(hull, Polygon([(-1, 0), (1, 0), (1, 1), (0, 1)])) < 1e-12
+    regions = camera_regions_from_scanlines([[-1, 0]], bearings, occ, SQUARE)
+    assert sym_diff_area(regions[0], hull) < 1e-12
+
+
+# --- errors ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(centers=[[0, 0], [0.1, 0]]), "overlap"),
+        (dict(centers=[[3, 0]]), "outside the room"),
+        (dict(camera_xy=[[0.05, 0]], camera_yaw=[0.0]), "camera 0 is inside object 0"),
+        (dict(camera_xy=np.empty((0, 2)), camera_yaw=np.empty(0)), "camera_xy must not be empty"),
+        (dict(camera_xy=[[np.nan, 0]]), "camera_xy must be finite"),
+        (dict(centers=[[np.nan, 0]]), "centers must be finite"),
+        (dict(fov=0.0), "fov must be in"),
+        (dict(fov=-1.0), "fov must be in"),
+        (dict(fov=2 * np.pi), "fov must be in"),
+        (dict(fov=[1.0, 1.0]), r"fov must be a scalar or have shape \(1,\)"),
+        (dict(camera_yaw=[0.0, 1.0]), r"camera_yaw must have shape \(1,\)"),
+        (dict(camera_xy=[1.0, 0.0]), r"camera_xy must have shape \(n, 2\)"),
+        (dict(radii=[0.1, 0.1]), r"radii must be a scalar or have shape \(1,\)"),
+        (dict(radii=0.0), "radii must be finite and > 0"),
+        (dict(room="square"), "room must be a shapely Polygon"),
+    ],
+)
+def test_disc_errors(kwargs, match):
+    args = dict(
+        camera_xy=[[-1, 0]], camera_yaw=[0.0], fov=np.pi, centers=[[0, 0]], radii=R, room=SQUARE
+    )
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        visual_hull_of_discs(**args)
+
+
+@pytest.mark.parametrize(
+    "bearings, occ, match",
+    [
+        ([[0.0, 0.1, 0.2]], [[True, False]], "scanlines must have the shape"),
+        ([[0.0, 0.1]], [[1, 0]], "scanlines must be a bool array"),
+        ([[0.0, 0.2, 0.1]], [[True, False, True]], "strictly monotone"),
+        ([[0.0]], [[True]], r"bearings must have shape \(1, W\) with W >= 2"),
+        ([[0.0, np.nan]], [[True, False]], "bearings must be finite"),
+        ([[0.0, 3.0, 6.0]], [[True, False, True]], "span less than 2\\*pi"),
+    ],
+)
+def test_scanline_errors(bearings, occ, match):
+    with pytest.raises(ValueError, match=match):
+        visual_hull_of_scanlines([[-1, 0]], np.array(bearings), np.array(occ), SQUARE)
+
+
+def test_prune_small_rejects_negative_area():
+    with pytest.raises(ValueError, match="min_area"):
+        prune_small(SQUARE, -1.0)
