@@ -1,0 +1,152 @@
+"""The node-side pipeline of a rig: per-camera precomputed maps, temporal state.
+
+>>> from scene import Camera
+>>> cam = Camera.from_pose(1, [0, 0, 1.5], 0.0, 0.0, 64, 48, np.radians(50), [0, 0, 0, 0, 0])
+>>> bg = np.full((1, 48, 64, 3), 120, np.uint8)
+>>> pipe = Pipeline([cam], PipelineParams(opening_kernel=1, spatial_kernel=1,
+...                 median_kernel=1, column_threshold=0.5), background=bg)
+>>> frame = bg.copy(); frame[0, 10:30, 30:34] = (200, 40, 40)
+>>> np.flatnonzero(pipe.process(frame)[0]).tolist()
+[30, 31, 32, 33]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .foreground import AngleTerms, background_model, check_frames, open_stacked
+from .params import PipelineParams
+from .rectify import Rectifier
+from .scanline import column_sums, median_threshold, spatial_smooth, temporal_smooth, true_scanlines
+
+
+@dataclass(frozen=True, eq=False)
+class StepOutput:
+    """Intermediate results of one batch.
+
+    foreground : (n_cams, H, W) bool, after the opening, raw (distorted) image
+    rectified : (n_cams, out_height, width) bool
+    smoothed : (n_cams, width) float, column counts after spatial and temporal smoothing
+    scanlines : (n_cams, width) bool
+    """
+
+    foreground: np.ndarray
+    rectified: np.ndarray
+    smoothed: np.ndarray
+    scanlines: np.ndarray
+
+
+class Pipeline:
+    """Frames to scanlines for a rig of calibrated cameras (all of one resolution).
+
+    cameras : sequence of :class:`scene.Camera`
+    params : :class:`PipelineParams` (defaults if None)
+    background : empty-room frames, (n_cams, H, W, 3) or (n_frames, n_cams, H, W, 3) uint8
+    """
+
+    def __init__(self, cameras, params: PipelineParams | None = None, background=None):
+        self.cameras = tuple(cameras)
+        if not self.cameras:
+            raise ValueError("cameras: expected at least one calibrated camera")
+        self.params = PipelineParams() if params is None else params
+        if not isinstance(self.params, PipelineParams):
+            raise ValueError(f"params: expected PipelineParams, got {type(self.params).__name__}")
+        self.height, self.width = self.cameras[0].height, self.cameras[0].width
+        self.row_stride = self.height + self.params.opening_kernel // 2
+        self.rectifier = Rectifier.build(self.cameras, self.row_stride)
+        self._buf = np.zeros((self.n_cams, self.row_stride, self.width), np.uint8)
+        self._terms: AngleTerms | None = None
+        self._state = None
+        if background is not None:
+            self.set_background(background)
+
+    @property
+    def n_cams(self) -> int:
+        return len(self.cameras)
+
+    @property
+    def bearings(self) -> np.ndarray:
+        """(n_cams, width) float, radians, world-frame bearing of each scanline column."""
+        return self.rectifier.bearings
+
+    @property
+    def frame_shape(self) -> tuple[int, int, int]:
+        """(n_cams, H, W) expected of every batch."""
+        return (self.n_cams, self.height, self.width)
+
+    def set_background(self, frames) -> None:
+        """Build the background model from empty-room frames (or a float32 model) and reset."""
+        arr = np.asarray(frames)
+        if arr.dtype == np.float32 and arr.ndim == 4:
+            bg = arr
+            if not bg.reshape(len(bg), -1).any(axis=1).all():
+                raise ValueError("background: a camera's background is all black; expected the lit, empty room")
+        else:
+            bg = background_model(arr)
+        if bg.shape != self.frame_shape + (3,):
+            n, h, w = self.frame_shape
+            raise ValueError(f"background: expected shape ({n}, {h}, {w}, 3) to match the calibration, "
+                             f"got {tuple(bg.shape)}")
+        p = self.params
+        self._terms = AngleTerms(bg, p.threshold_deg, p.brightness_floor, p.dark_delta)
+        self.reset()
+
+    @property
+    def background(self) -> np.ndarray:
+        """(n_cams, H, W, 3) float32 background model."""
+        self._need_background()
+        return self._terms.background
+
+    def reset(self) -> None:
+        """Forget the temporal state (start of a new sequence)."""
+        self._state = None
+
+    def _need_background(self):
+        if self._terms is None:
+            raise ValueError("background: not set; call set_background() with empty-room frames first")
+
+    def step(self, frames) -> StepOutput:
+        """Process one batch, returning the intermediate results too (see :class:`StepOutput`)."""
+        opened = self._foreground_stacked(frames)
+        rect = self.rectifier.remap_stacked(opened)
+        p = self.params
+        smoothed = temporal_smooth(spatial_smooth(column_sums(rect), p.spatial_kernel), self._state,
+                                   p.temporal_alpha)
+        self._state = smoothed
+        scan = median_threshold(smoothed, p.median_kernel, p.column_threshold)
+        fg = opened.reshape(self._buf.shape)[:, :self.height].view(bool)
+        return StepOutput(fg, rect.view(bool), smoothed, scan)
+
+    def process(self, frames) -> np.ndarray:
+        """(n_cams, H, W, 3) uint8 RGB -> (n_cams, W) bool scanlines; updates the temporal state."""
+        opened = self._foreground_stacked(frames)
+        rect = self.rectifier.remap_stacked(opened)
+        p = self.params
+        sums = column_sums(rect)
+        smoothed = temporal_smooth(spatial_smooth(sums, p.spatial_kernel), self._state, p.temporal_alpha)
+        self._state = smoothed
+        return median_threshold(smoothed, p.median_kernel, p.column_threshold)
+
+    def _foreground_stacked(self, frames) -> np.ndarray:
+        self._need_background()
+        frames = check_frames("frames", frames, self.frame_shape)
+        self._terms.mask(frames, self._buf[:, :self.height])
+        stacked = self._buf.reshape(-1, self.width)
+        opened = open_stacked(stacked, self.params.opening_kernel)
+        return opened.copy() if opened is stacked else opened
+
+    def ground_truth(self, labels) -> tuple[np.ndarray, np.ndarray]:
+        """True foreground and scanlines from label images.
+
+        labels : (n_cams, H, W) int, 0 background, person id + 1 elsewhere (raw image)
+        Returns (mask (n_cams, H, W) bool, scanlines (n_cams, width) bool): columns where
+        any person is after the same undistortion and rectification (no opening, no smoothing).
+        """
+        lab = np.asarray(labels)
+        if lab.shape != self.frame_shape:
+            n, h, w = self.frame_shape
+            raise ValueError(f"labels: expected shape ({n}, {h}, {w}), got {tuple(lab.shape)}")
+        mask = lab > 0
+        return mask, true_scanlines(self.rectifier.rectify(mask))

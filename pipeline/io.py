@@ -1,0 +1,155 @@
+"""Reading what the pipeline consumes: calibration files, render directories, video.
+
+Render directory layout (written by ``camtask render``)::
+
+    DIR/calibration/camNN.yaml   cv2.FileStorage: camera_matrix, distortion_coefficients,
+                                 rvec, tvec (world -> camera, metres), image_width, image_height
+    DIR/frames/camNN/NNNNNN.png  RGB frames (stored by OpenCV as BGR on disk)
+    DIR/masks/camNN/NNNNNN.png   labels: 0 background, person id + 1 elsewhere
+    DIR/background/camNN.png     the empty room
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from scene.camera import Camera
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
+
+
+def load_calibration(path: str | os.PathLike, number: int | None = None) -> Camera:
+    """A :class:`Camera` from an OpenCV calibration file (YAML/XML, FileStorage).
+
+    number : camera number; by default parsed from ``camNN`` in the file name, else 1.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"calibration: no such file {str(path)!r}")
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    try:
+        def mat(key, required=True):
+            node = fs.getNode(key)
+            if node.empty():
+                if required:
+                    raise ValueError(f"calibration: {path.name} has no {key!r}")
+                return None
+            return node.real() if node.isReal() or node.isInt() else node.mat()
+        K = np.asarray(mat("camera_matrix"), float)
+        dist = np.asarray(mat("distortion_coefficients"), float).ravel()
+        rvec = np.asarray(mat("rvec"), float).reshape(3)
+        tvec = np.asarray(mat("tvec"), float).reshape(3)
+        width, height = int(mat("image_width")), int(mat("image_height"))
+    finally:
+        fs.release()
+    if dist.size < 5:
+        dist = np.concatenate([dist, np.zeros(5 - dist.size)])
+    elif dist.size > 5:
+        if np.any(dist[5:] != 0):
+            raise ValueError(f"calibration: {path.name} distortion_coefficients: expected at most 5 "
+                             f"(k1 k2 p1 p2 k3), got {dist.size} non-zero")
+        dist = dist[:5]
+    if number is None:
+        m = re.search(r"cam(\d+)", path.stem)
+        number = int(m.group(1)) if m else 1
+    R, _ = cv2.Rodrigues(rvec)
+    return Camera(number, K, dist, R, tvec, width, height)
+
+
+def read_rgb(path: str | os.PathLike) -> np.ndarray:
+    """(H, W, 3) uint8 RGB image from a file (OpenCV reads BGR; converted here)."""
+    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if img is None:
+        raise ValueError(f"image: cannot read {str(path)!r}")
+    return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+
+
+def read_labels(path: str | os.PathLike) -> np.ndarray:
+    """(H, W) int label image (0 background) from a PNG (8 or 16 bit, one channel)."""
+    img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise ValueError(f"mask: cannot read {str(path)!r}")
+    if img.ndim == 3:
+        img = img[..., 0]
+    return img.astype(np.int32)
+
+
+class RenderDir:
+    """A render directory: cameras, background, and frames/labels by frame index.
+
+    cameras : tuple of :class:`Camera`, in camera-number order
+    frame_names : sorted frame file names (``NNNNNN.png``) common to all cameras
+    """
+
+    def __init__(self, root: str | os.PathLike):
+        self.root = Path(root)
+        if not self.root.is_dir():
+            raise FileNotFoundError(f"render directory: no such directory {str(self.root)!r}")
+        calib = sorted((self.root / "calibration").glob("cam*.yaml"))
+        if not calib:
+            raise ValueError(f"render directory: {self.root} has no calibration/camNN.yaml files")
+        self.cameras = tuple(load_calibration(p) for p in calib)
+        self.names = tuple(c.name for c in self.cameras)
+        first = self.root / "frames" / self.names[0]
+        self.frame_names = tuple(sorted(p.name for p in first.glob("*.png")))
+        if not self.frame_names:
+            raise ValueError(f"render directory: {first} has no frames")
+
+    def __len__(self) -> int:
+        return len(self.frame_names)
+
+    def background(self) -> np.ndarray:
+        """(n_cams, H, W, 3) uint8 RGB empty-room images."""
+        return np.stack([read_rgb(self.root / "background" / f"{n}.png") for n in self.names])
+
+    def frames(self, index: int) -> np.ndarray:
+        """(n_cams, H, W, 3) uint8 RGB frame ``index`` (0-based) of every camera."""
+        f = self.frame_names[index]
+        return np.stack([read_rgb(self.root / "frames" / n / f) for n in self.names])
+
+    def labels(self, index: int) -> np.ndarray:
+        """(n_cams, H, W) int label images of frame ``index``."""
+        f = self.frame_names[index]
+        return np.stack([read_labels(self.root / "masks" / n / f) for n in self.names])
+
+
+def iter_video_frames(source: str | os.PathLike):
+    """Yield (H, W, 3) uint8 RGB frames of a video file or of a folder of images (sorted)."""
+    source = Path(source)
+    if source.is_dir():
+        files = sorted(p for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+        if not files:
+            raise ValueError(f"video: folder {str(source)!r} has no images")
+        for p in files:
+            yield read_rgb(p)
+        return
+    if not source.is_file():
+        raise FileNotFoundError(f"video: no such file or folder {str(source)!r}")
+    cap = cv2.VideoCapture(str(source))
+    if not cap.isOpened():
+        raise ValueError(f"video: cannot open {str(source)!r}")
+    try:
+        while True:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            yield cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
+    finally:
+        cap.release()
+
+
+def save_npz_atomic(path: str | os.PathLike, **arrays) -> None:
+    """``np.savez_compressed`` to a temporary file beside ``path``, then os.replace."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
+    try:
+        np.savez_compressed(tmp, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise

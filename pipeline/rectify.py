@@ -1,0 +1,152 @@
+"""Lens-distortion correction and rectification to a level virtual camera (step 4).
+
+The lab cameras are pitched down, so columns of the raw image are not vertical planes.
+Each mask is remapped, in one pass with precomputed maps, to a *level* virtual camera at
+the same centre and yaw (``cv2.initUndistortRectifyMap`` with the rotation from the real
+camera frame to the virtual one). The virtual camera's y axis is the world's down, so
+every output column is a vertical plane through the camera centre with an exact
+world-frame bearing (:func:`column_bearings`). Its focal length is chosen so that its
+horizontal field of view covers every pixel of the real (distorted) image; pixels are
+square, and the output height covers the real image vertically.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from scene.camera import Camera, rotation_from_yaw_pitch
+
+
+def level_rotation(camera: Camera) -> np.ndarray:
+    """Rotation (3, 3) from the real camera frame to the level virtual camera frame.
+
+    ``X_virtual = R_rect @ X_camera``; the virtual camera looks along ``camera.yaw`` with
+    no pitch or roll (OpenCV axes: x right, y down = world -z, z forward, horizontal).
+    """
+    return rotation_from_yaw_pitch(camera.yaw, 0.0) @ camera.R.T
+
+
+def _border_points(width: int, height: int, per_side: int = 64) -> np.ndarray:
+    """(m, 2) float (u, v) points along the outer edges of the image's pixels."""
+    us = np.linspace(-0.5, width - 0.5, per_side)
+    vs = np.linspace(-0.5, height - 0.5, per_side)
+    return np.concatenate([
+        np.stack([us, np.full_like(us, -0.5)], 1), np.stack([us, np.full_like(us, height - 0.5)], 1),
+        np.stack([np.full_like(vs, -0.5), vs], 1), np.stack([np.full_like(vs, width - 0.5), vs], 1),
+    ])
+
+
+def virtual_extent(camera: Camera) -> tuple[float, float, float, float]:
+    """(xmin, xmax, ymin, ymax) of the real image border on the virtual camera's z = 1 plane."""
+    pts = _border_points(camera.width, camera.height).reshape(-1, 1, 2)
+    norm = cv2.undistortPoints(pts, camera.K, camera.dist, None, None, None,
+                               (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10))
+    rays = np.concatenate([norm.reshape(-1, 2), np.ones((len(pts), 1))], 1) @ level_rotation(camera).T
+    if np.any(rays[:, 2] <= 0.05):
+        raise ValueError(f"camera {camera.number}: field of view too wide to rectify to a level camera")
+    x, y = rays[:, 0] / rays[:, 2], rays[:, 1] / rays[:, 2]
+    return float(x.min()), float(x.max()), float(y.min()), float(y.max())
+
+
+def virtual_camera_matrix(camera: Camera, width: int | None = None) -> tuple[np.ndarray, int]:
+    """Camera matrix (3, 3) of the level virtual camera and the output height it needs.
+
+    width : output width, pixels (default the camera's). Columns 0 and width - 1 are the
+    left and right extremes of the real image; pixels are square.
+    """
+    width = camera.width if width is None else int(width)
+    xmin, xmax, ymin, ymax = virtual_extent(camera)
+    f = (width - 1) / (xmax - xmin)
+    K = np.array([[f, 0.0, -xmin * f], [0.0, f, -ymin * f], [0.0, 0.0, 1.0]])
+    return K, int(np.ceil((ymax - ymin) * f)) + 1
+
+
+def column_bearings(camera: Camera, K_virtual: np.ndarray, width: int) -> np.ndarray:
+    """World-frame bearing of each output column's vertical plane through the camera centre.
+
+    Returns (width,) float, radians in (-pi, pi], ``atan2(dy, dx)`` of the floor-plane
+    direction; it decreases from left to right (x is to the camera's right).
+    """
+    x = (np.arange(width) - K_virtual[0, 2]) / K_virtual[0, 0]
+    rays_virtual = np.stack([x, np.zeros_like(x), np.ones_like(x)], 1)
+    d_world = rays_virtual @ rotation_from_yaw_pitch(camera.yaw, 0.0)   # R_v.T @ ray, batched
+    return np.arctan2(d_world[:, 1], d_world[:, 0])
+
+
+def rectify_maps(camera: Camera, K_virtual: np.ndarray, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Float maps (out_h, out_w) float32 x (col) and y (row) into the raw image, size = (w, h)."""
+    return cv2.initUndistortRectifyMap(camera.K, camera.dist, level_rotation(camera), K_virtual,
+                                       size, cv2.CV_32FC1)
+
+
+@dataclass(frozen=True, eq=False)
+class Rectifier:
+    """Precomputed rectification of a rig: one remap call for all cameras.
+
+    Input masks are stacked as (n_cams * row_stride, W) uint8 with camera i's rows at
+    ``i * row_stride``; output (n_cams, out_height, width) uint8.
+
+    K_virtual : (n_cams, 3, 3) float; bearings : (n_cams, width) float, radians, world frame
+    maps_x, maps_y : (n_cams, out_height, width) float32 per-camera maps (for references)
+    """
+
+    width: int
+    out_height: int
+    row_stride: int
+    K_virtual: np.ndarray
+    bearings: np.ndarray
+    maps_x: np.ndarray
+    maps_y: np.ndarray
+    fixed_map: np.ndarray
+
+    @classmethod
+    def build(cls, cameras, row_stride: int | None = None, width: int | None = None) -> "Rectifier":
+        cameras = tuple(cameras)
+        if not cameras:
+            raise ValueError("cameras: expected at least one calibrated camera")
+        h, w = cameras[0].height, cameras[0].width
+        if any((c.height, c.width) != (h, w) for c in cameras):
+            raise ValueError("cameras: expected every camera to have the same resolution")
+        width = w if width is None else int(width)
+        row_stride = h if row_stride is None else int(row_stride)
+        Ks, heights = zip(*(virtual_camera_matrix(c, width) for c in cameras))
+        out_h = max(heights)
+        mx, my, stacked_y = [], [], []
+        for i, (cam, K) in enumerate(zip(cameras, Ks)):
+            x, y = rectify_maps(cam, K, (width, out_h))
+            mx.append(x); my.append(y)
+            outside = (np.rint(x) < 0) | (np.rint(x) > w - 1) | (np.rint(y) < 0) | (np.rint(y) > h - 1)
+            ys = y + i * row_stride
+            ys[outside] = -10.0
+            xs = x.copy(); xs[outside] = -10.0
+            stacked_y.append((xs, ys))
+        big_x = np.concatenate([s[0] for s in stacked_y])
+        big_y = np.concatenate([s[1] for s in stacked_y])
+        fixed, _ = cv2.convertMaps(big_x, big_y, cv2.CV_16SC2, nninterpolation=True)
+        bearings = np.stack([column_bearings(c, K, width) for c, K in zip(cameras, Ks)])
+        ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
+        return cls(width, out_h, row_stride, ro(np.stack(Ks)), ro(bearings), ro(np.stack(mx)),
+                   ro(np.stack(my)), fixed)
+
+    def remap_stacked(self, stacked: np.ndarray) -> np.ndarray:
+        """Remap stacked masks (n_cams * row_stride, W) uint8 -> (n_cams, out_height, width) uint8."""
+        out = cv2.remap(stacked, self.fixed_map, None, cv2.INTER_NEAREST,
+                        borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        return out.reshape(-1, self.out_height, self.width)
+
+    def rectify(self, masks) -> np.ndarray:
+        """Rectify masks (n_cams, H, W) bool/uint8 -> (n_cams, out_height, width) bool."""
+        m = np.asarray(masks)
+        n, h, w = m.shape
+        if n != self.n_cams:
+            raise ValueError(f"masks: expected {self.n_cams} cameras, got {n}")
+        buf = np.zeros((n, self.row_stride, w), np.uint8)
+        buf[:, :h] = m != 0
+        return self.remap_stacked(buf.reshape(-1, w)).astype(bool)
+
+    @property
+    def n_cams(self) -> int:
+        return self.bearings.shape[0]
