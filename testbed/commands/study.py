@@ -1,0 +1,87 @@
+"""``camtask study NAME``: reproduce the paper's simulation figures.
+
+Prints a table (or one JSON document with ``--json``), optionally draws the figure to
+``--plot FILE.png``, shows a progress bar on stderr, and runs trials on Dask: a local
+cluster of ``--workers`` processes (``0``: in this process) or ``--scheduler ADDRESS``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import sys
+import time
+
+from testbed.parallel import default_workers, open_client, run_tasks
+
+STUDY_HELP = {
+    "cameras": "residual vs number of cameras and objects (paper figs 5, 6)",
+    "static": "taskers on static objects (paper fig 8)",
+    "moving": "taskers on walking objects, update rates (paper figs 9, 10)",
+}
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser("study", help="reproduce the paper's simulation figures",
+                              description=__doc__)
+    sub = p.add_subparsers(dest="study", metavar="NAME", required=True)
+    for name, text in STUDY_HELP.items():
+        sp = sub.add_parser(name, help=text, description=text)
+        _module(name).add_arguments(sp)
+        g = sp.add_argument_group("common options")
+        g.add_argument("--trials", type=int, default=500, help="trials per setting (default 500, as the paper)")
+        g.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+        g.add_argument("--json", action="store_true", help="print one JSON document instead of a table")
+        g.add_argument("--plot", metavar="FILE.png", help="draw the paper's figure to this PNG")
+        g.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+        x = g.add_mutually_exclusive_group()
+        x.add_argument("--workers", type=int, default=None,
+                       help=f"local Dask worker processes (default: cores = {default_workers()}; 0 = in-process)")
+        x.add_argument("--scheduler", metavar="ADDRESS", help="use an existing Dask scheduler, e.g. tcp://host:8786")
+        sp.set_defaults(func=run)
+
+
+def _module(name: str):
+    return importlib.import_module(f"testbed.studies.{name}")
+
+
+def run(args) -> int:
+    mod = _module(args.study)
+    if args.trials < 1:
+        raise ValueError(f"--trials: expected an integer >= 1, got {args.trials}")
+    if args.seed < 0:
+        raise ValueError(f"--seed: expected an integer >= 0, got {args.seed}")
+    if args.workers is not None and args.workers < 0:
+        raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
+    if args.plot and not args.plot.lower().endswith(".png"):
+        raise ValueError(f"--plot: expected a .png file name, got {args.plot!r}")
+    opts = mod.parse(args)
+    from testbed.studies.core import TASKING_BACKEND
+
+    t0 = time.perf_counter()
+    with open_client(args.workers, args.scheduler) as client:
+        workers = 0 if client is None else len(client.scheduler_info().get("workers", {}))
+
+        def runner(func, tasks, weights, desc):
+            return run_tasks(func, tasks, client=client, workers=0, progress=not args.no_progress,
+                             desc=desc, weights=weights)
+
+        result = mod.run(opts, args.trials, args.seed, runner)
+    elapsed = time.perf_counter() - t0
+    result["meta"] = {
+        "study": args.study, "seed": args.seed, "trials": args.trials,
+        "arguments": {k: v for k, v in opts.items()},
+        "workers": workers, "scheduler": args.scheduler, "elapsed_s": round(elapsed, 3),
+        "tasking_backend": TASKING_BACKEND,
+        "command": "camtask " + " ".join(sys.argv[1:]) if sys.argv and "camtask" in sys.argv[0] else None,
+    }
+    if args.plot:
+        mod.plot(result, args.plot)
+    if args.json:
+        json.dump(result, sys.stdout, indent=1, allow_nan=False)
+        sys.stdout.write("\n")
+    else:
+        print(mod.format_table(result))
+        print(f"\n{args.study}: {args.trials} trials, seed {args.seed}, {elapsed:.1f} s"
+              + (f", plot {args.plot}" if args.plot else ""))
+    return 0

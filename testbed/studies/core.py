@@ -1,0 +1,125 @@
+"""What every study shares: the paper's circular rig, seeding, residuals, parsing.
+
+The occupancy core comes from :mod:`tasking` (``visual_hull_of_discs``,
+``prune_small``, ``polygon_centres``, ``choose_cameras``, ``TASKERS``).
+
+>>> cam_xy, yaw = circle_cameras(4)
+>>> np.round(cam_xy, 6).tolist()
+[[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [-0.0, -1.0]]
+>>> parse_ints("k", "2-4,8")
+[2, 3, 4, 8]
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+from shapely.geometry import Polygon
+
+from scene.motion import circle_polygon
+from tasking import polygon_centres, prune_small, visual_hull_of_discs
+
+try:  # the taskers land in tasking/ after the hull; until then use the stand-in
+    from tasking import TASKERS, choose_cameras
+
+    TASKING_BACKEND = "tasking"
+except ImportError:  # pragma: no cover - depends on the state of tasking/
+    from ._standin import TASKERS, choose_cameras
+
+    TASKING_BACKEND = "standin"
+
+__all__ = [
+    "FOV", "TASKING_BACKEND", "TASKERS", "choose_cameras", "circle_cameras", "circle_room",
+    "hull_residual", "parse_ints", "parse_names", "polygon_centres", "trial_rng",
+    "visual_hull_of_discs",
+]
+
+#: The paper's cameras see 180 degrees.
+FOV = np.pi
+#: Vertices of the polygon standing in for the circular room.
+ROOM_VERTICES = 720
+
+
+@lru_cache(maxsize=8)
+def circle_room(radius: float = 1.0) -> Polygon:
+    """The paper's circular room (a regular 720-gon) of ``radius`` metres at the origin."""
+    return circle_polygon(radius, ROOM_VERTICES)
+
+
+def circle_cameras(n: int, radius: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` cameras evenly on the room's perimeter, camera 1 at angle 0, facing the centre.
+
+    returns camera_xy : (n, 2) float, metres; camera_yaw : (n,) float, radians
+    """
+    a = 2.0 * np.pi * np.arange(n) / n
+    xy = radius * np.column_stack([np.cos(a), np.sin(a)])
+    return xy, np.mod(a + np.pi, 2.0 * np.pi)
+
+
+def trial_rng(seed: int, study: int, *key: int) -> np.random.Generator:
+    """The generator of one trial: a function of (seed, study, setting..., trial) only.
+
+    Workers never influence it, so results are identical for any worker count.
+    """
+    ss = np.random.SeedSequence(int(seed), spawn_key=(int(study), *map(int, key)))
+    return np.random.default_rng(ss)
+
+
+def hull_residual(camera_xy, camera_yaw, centers, radius, room) -> tuple[float, float, list]:
+    """Residual of the visual hull, in units of one object's area, raw and pruned.
+
+    Residual = (hull area - total object area) / (pi radius^2); "pruned" after removing
+    polygons smaller than one object's area (the paper's rule).
+    returns (raw, pruned, polygons) where polygons is the pruned list
+    """
+    hull = visual_hull_of_discs(camera_xy, camera_yaw, FOV, centers, radius, room)
+    obj = np.pi * radius**2
+    polys = prune_small(hull, obj)
+    total = len(centers) * obj
+    return (hull.area - total) / obj, (sum(p.area for p in polys) - total) / obj, polys
+
+
+def parse_ints(name: str, text, *, minimum: int = 1) -> list[int]:
+    """Parse ``"1,2,5-8"`` into a sorted list of distinct ints >= ``minimum``."""
+    if isinstance(text, (list, tuple)):
+        text = ",".join(map(str, text))
+    out: set[int] = set()
+    for part in str(text).split(","):
+        part = part.strip()
+        try:
+            if "-" in part[1:]:
+                a, b = part.split("-", 1) if not part.startswith("-") else (part, "")
+                lo, hi = int(a), int(b)
+                if hi < lo:
+                    raise ValueError
+                out.update(range(lo, hi + 1))
+            else:
+                out.add(int(part))
+        except ValueError:
+            raise ValueError(
+                f"--{name}: expected integers like '2,3,4' or '2-8', got {text!r}"
+            ) from None
+    bad = [v for v in out if v < minimum]
+    if bad:
+        raise ValueError(f"--{name}: expected integers >= {minimum}, got {min(bad)}")
+    return sorted(out)
+
+
+def parse_names(name: str, text: str, valid) -> list[str]:
+    """Parse ``"a,b"`` into names, each one of ``valid`` (order kept, duplicates dropped)."""
+    names = [s.strip() for s in str(text).split(",") if s.strip()]
+    if not names:
+        raise ValueError(f"--{name}: expected a comma-separated list, got {text!r}")
+    for s in names:
+        if s not in valid:
+            raise ValueError(f"--{name}: unknown value {s!r}; expected one of {', '.join(valid)}")
+    return list(dict.fromkeys(names))
+
+
+def mean_sem(x) -> tuple[float, float]:
+    """Mean and standard error of the mean (0 for a single value)."""
+    x = np.asarray(x, dtype=float)
+    if len(x) < 2:
+        return float(x.mean()), 0.0
+    return float(x.mean()), float(x.std(ddof=1) / np.sqrt(len(x)))

@@ -1,0 +1,164 @@
+"""Study ``moving``: taskers on walking objects (paper figs 9, 10).
+
+Objects walk by the random-waypoint model with right-hand avoidance
+(:func:`scene.motion.random_waypoint`). Frame 0 is seen by the uniform set of k
+cameras. At every later frame the tasker chooses its cameras from *estimates*: the
+centres of the previous frame's hull polygons (after removing polygons smaller than
+one object), never the true positions; the hull of the true discs seen by the chosen
+cameras gives that frame's residual. ``residual`` is the time average over frames
+1..steps-1, then the mean over trials.
+
+- ``uniform``: the uniform set, never changed;
+- ``greedy``: full greedy choice every frame;
+- ``incremental``: starts from the uniform set; every ``u`` frames (``--update-every``)
+  greedily removes then adds ``--m`` cameras. Each ``u`` gives a record.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import core
+
+STUDY_ID = 2
+CHUNK = 2
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--objects", type=int, default=5, help="number of objects (default 5)")
+    p.add_argument("--k", default="2-8", help="numbers of tasked cameras (default 2-8)")
+    p.add_argument("--candidates", type=int, default=16, help="cameras to choose from (default 16)")
+    p.add_argument("--taskers", default="uniform,greedy,incremental",
+                   help="comma-separated taskers (default uniform,greedy,incremental)")
+    p.add_argument("--update-every", default="1,3,5,7",
+                   help="incremental re-tasking periods in frames (default 1,3,5,7)")
+    p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
+    p.add_argument("--steps", type=int, default=40, help="frames per trial (default 40)")
+    p.add_argument("--dt", type=float, default=0.1, help="seconds per frame (default 0.1)")
+    p.add_argument("--speed", type=float, default=0.5, help="walking speed, m/s (default 0.5)")
+    p.add_argument("--radius", type=float, default=0.1, help="object radius, metres (default 0.1)")
+
+
+def parse(args) -> dict:
+    if args.objects < 1:
+        raise ValueError(f"--objects: expected an integer >= 1, got {args.objects}")
+    if args.candidates < 2:
+        raise ValueError(f"--candidates: expected an integer >= 2, got {args.candidates}")
+    ks = core.parse_ints("k", args.k, minimum=1)
+    if max(ks) > args.candidates:
+        raise ValueError(f"--k: {max(ks)} cameras exceed the {args.candidates} candidates")
+    taskers = core.parse_names("taskers", args.taskers, ("uniform", "greedy", "lazy_greedy", "incremental"))
+    us = core.parse_ints("update-every", args.update_every, minimum=1)
+    if args.m < 1 or args.m >= min(ks):
+        if "incremental" in taskers:
+            raise ValueError(f"--m: expected an integer in [1, min(k) - 1], got {args.m}")
+    if args.steps < 2:
+        raise ValueError(f"--steps: expected an integer >= 2, got {args.steps}")
+    if not args.dt > 0 or not args.speed >= 0:
+        raise ValueError("--dt and --speed: expected dt > 0 and speed >= 0")
+    if not 0 < args.radius < 0.5:
+        raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
+    return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),
+            "taskers": taskers, "update_every": us, "m": int(args.m), "steps": int(args.steps),
+            "dt": float(args.dt), "speed": float(args.speed), "radius": float(args.radius)}
+
+
+def settings(opts) -> list[tuple[str, int, int]]:
+    """(tasker, k, update_every) in record order."""
+    out = []
+    for tasker in opts["taskers"]:
+        for u in (opts["update_every"] if tasker == "incremental" else [1]):
+            for k in opts["k"]:
+                out.append((tasker, k, u))
+    return out
+
+
+def run_trials(start, stop, opts, seed) -> np.ndarray:
+    """returns (stop - start, len(settings)) float: time-averaged residual."""
+    from scene.motion import random_waypoint
+
+    room = core.circle_room(1.0)
+    xy, yaw = core.circle_cameras(opts["candidates"])
+    r = opts["radius"]
+    sets = settings(opts)
+    out = np.empty((stop - start, len(sets)))
+    for t in range(start, stop):
+        traj = random_waypoint(room, np.full(opts["objects"], r), opts["steps"], opts["dt"],
+                               opts["speed"], core.trial_rng(seed, STUDY_ID, 0, t))
+        for s, (tasker, k, u) in enumerate(sets):
+            S = core.choose_cameras("uniform", k, xy, yaw, core.FOV, traj[0], r, room)
+            polys = core.hull_residual(xy[S], yaw[S], traj[0], r, room)[2]
+            est = core.polygon_centres(polys)
+            total = 0.0
+            for f in range(1, opts["steps"]):
+                if tasker != "uniform" and (f - 1) % u == 0 and len(est):
+                    S = core.choose_cameras(tasker, k, xy, yaw, core.FOV, est, r, room,
+                                            current=S, m=opts["m"])
+                _, res, polys = core.hull_residual(xy[S], yaw[S], traj[f], r, room)
+                total += res
+                if polys:
+                    est = core.polygon_centres(polys)
+            out[t - start, s] = total / (opts["steps"] - 1)
+    return out
+
+
+def run(opts: dict, trials: int, seed: int, runner) -> dict:
+    chunks = [(s, min(s + CHUNK, trials)) for s in range(0, trials, CHUNK)]
+    res = np.concatenate(runner(run_trials, [(a, b, opts, seed) for a, b in chunks],
+                                [b - a for a, b in chunks], "moving"))
+    records = []
+    for s, (tasker, k, u) in enumerate(settings(opts)):
+        mean, sem = core.mean_sem(res[:, s])
+        records.append({"tasker": tasker, "k": k, "update_every": u, "residual": mean,
+                        "residual_sem": sem, "trials": trials, "steps": opts["steps"]})
+    return {"records": records}
+
+
+def _label(tasker, u):
+    return tasker if tasker != "incremental" else f"incremental/{u}"
+
+
+def format_table(result: dict) -> str:
+    recs = result["records"]
+    cols = list(dict.fromkeys((r["tasker"], r["update_every"]) for r in recs))
+    ks = sorted({r["k"] for r in recs})
+    t = {(r["tasker"], r["update_every"], r["k"]): r for r in recs}
+    lines = ["Time-averaged residual (object areas) with moving objects "
+             "(incremental/u: re-tasked every u frames):",
+             f"{'k':>3} " + "".join(f"{_label(*c):>15}" for c in cols)]
+    for k in ks:
+        lines.append(f"{k:>3} " + "".join(f"{t[(c[0], c[1], k)]['residual']:15.4f}" for c in cols))
+    return "\n".join(lines)
+
+
+def plot(result: dict, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    recs = result["records"]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
+    cols = list(dict.fromkeys((r["tasker"], r["update_every"]) for r in recs))
+
+    def draw(ax, tasker, u, **kw):
+        rs = [r for r in recs if r["tasker"] == tasker and r["update_every"] == u]
+        ax.errorbar([r["k"] for r in rs], [r["residual"] for r in rs],
+                    yerr=[r["residual_sem"] for r in rs], marker="o", capsize=3,
+                    label=_label(tasker, u), **kw)
+
+    for tasker, u in cols:
+        if tasker != "incremental" or u == min(c[1] for c in cols if c[0] == "incremental"):
+            draw(axes[0], tasker, u)
+        if tasker == "incremental" or tasker == "uniform":
+            draw(axes[1], tasker, u)
+    axes[0].set(title="Fig. 9: taskers with moving objects", xlabel="number of cameras tasked k",
+                ylabel="time-averaged residual / object area")
+    axes[1].set(title="Fig. 10: incremental greedy, update every u frames",
+                xlabel="number of cameras tasked k")
+    for ax in axes:
+        ax.set_yscale("log")
+        ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)

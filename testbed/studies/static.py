@@ -1,0 +1,107 @@
+"""Study ``static``: taskers on static objects (paper fig 8).
+
+``--objects`` discs are dropped at random (as in ``cameras``); ``--candidates`` cameras
+sit evenly on the perimeter. Each tasker chooses k of them from the *true* object
+positions; the residual (object areas, after removing polygons smaller than one
+object) is averaged over trials. All taskers and k see the same drops.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import core
+
+STUDY_ID = 1
+CHUNK = 10
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--objects", type=int, default=5, help="number of objects (default 5)")
+    p.add_argument("--k", default="2-8", help="numbers of tasked cameras (default 2-8)")
+    p.add_argument("--candidates", type=int, default=16, help="cameras to choose from (default 16)")
+    p.add_argument("--taskers", default="uniform,clustering,optimal,greedy",
+                   help="comma-separated taskers (default uniform,clustering,optimal,greedy)")
+    p.add_argument("--radius", type=float, default=0.1, help="object radius, metres (default 0.1)")
+    p.add_argument("--max-subsets", type=int, default=200_000,
+                   help="refuse 'optimal' beyond this many subsets (default 200000)")
+
+
+def parse(args) -> dict:
+    if args.objects < 1:
+        raise ValueError(f"--objects: expected an integer >= 1, got {args.objects}")
+    if args.candidates < 2:
+        raise ValueError(f"--candidates: expected an integer >= 2, got {args.candidates}")
+    ks = core.parse_ints("k", args.k, minimum=1)
+    if max(ks) > args.candidates:
+        raise ValueError(f"--k: {max(ks)} cameras exceed the {args.candidates} candidates")
+    taskers = core.parse_names("taskers", args.taskers, [t for t in core.TASKERS if t != "incremental"])
+    if not 0 < args.radius < 0.5:
+        raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
+    return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),
+            "taskers": taskers, "radius": float(args.radius), "max_subsets": int(args.max_subsets)}
+
+
+def run_trials(start, stop, opts, seed) -> np.ndarray:
+    """returns (stop - start, len(taskers), len(k)) float: residual after pruning."""
+    from scene.motion import random_drop
+
+    room = core.circle_room(1.0)
+    xy, yaw = core.circle_cameras(opts["candidates"])
+    r = opts["radius"]
+    out = np.empty((stop - start, len(opts["taskers"]), len(opts["k"])))
+    for t in range(start, stop):
+        centers = random_drop(room, np.full(opts["objects"], r), core.trial_rng(seed, STUDY_ID, 0, t))
+        for i, tasker in enumerate(opts["taskers"]):
+            for j, k in enumerate(opts["k"]):
+                S = core.choose_cameras(tasker, k, xy, yaw, core.FOV, centers, r, room,
+                                        max_subsets=opts["max_subsets"],
+                                        rng=core.trial_rng(seed, STUDY_ID, 1 + i, k, t))
+                out[t - start, i, j] = core.hull_residual(xy[S], yaw[S], centers, r, room)[1]
+    return out
+
+
+def run(opts: dict, trials: int, seed: int, runner) -> dict:
+    chunks = [(s, min(s + CHUNK, trials)) for s in range(0, trials, CHUNK)]
+    res = np.concatenate(runner(run_trials, [(a, b, opts, seed) for a, b in chunks],
+                                [b - a for a, b in chunks], "static"))
+    records = []
+    for i, tasker in enumerate(opts["taskers"]):
+        for j, k in enumerate(opts["k"]):
+            mean, sem = core.mean_sem(res[:, i, j])
+            records.append({"tasker": tasker, "k": k, "residual": mean, "residual_sem": sem,
+                            "trials": trials})
+    return {"records": records}
+
+
+def format_table(result: dict) -> str:
+    recs = result["records"]
+    taskers = list(dict.fromkeys(r["tasker"] for r in recs))
+    ks = sorted({r["k"] for r in recs})
+    t = {(r["tasker"], r["k"]): r for r in recs}
+    lines = ["Residual (object areas) with static objects, by tasker and k:",
+             f"{'k':>3} " + "".join(f"{n:>13}" for n in taskers)]
+    for k in ks:
+        lines.append(f"{k:>3} " + "".join(f"{t[(n, k)]['residual']:13.4f}" for n in taskers))
+    return "\n".join(lines)
+
+
+def plot(result: dict, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    recs = result["records"]
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for tasker in dict.fromkeys(r["tasker"] for r in recs):
+        rs = [r for r in recs if r["tasker"] == tasker]
+        ax.errorbar([r["k"] for r in rs], [r["residual"] for r in rs],
+                    yerr=[r["residual_sem"] for r in rs], marker="o", capsize=3, label=tasker)
+    ax.set_yscale("log")
+    ax.set(xlabel="number of cameras tasked k", ylabel="residual / object area",
+           title="Fig. 8: taskers with static objects")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
