@@ -47,6 +47,11 @@ class Pipeline:
     """
 
     def __init__(self, cameras, params: PipelineParams | None = None, background=None):
+        self._init(cameras, params, None)
+        if background is not None:
+            self.set_background(background)
+
+    def _init(self, cameras, params, rectifier):
         self.cameras = tuple(cameras)
         if not self.cameras:
             raise ValueError("cameras: expected at least one calibrated camera")
@@ -55,12 +60,12 @@ class Pipeline:
             raise ValueError(f"params: expected PipelineParams, got {type(self.params).__name__}")
         self.height, self.width = self.cameras[0].height, self.cameras[0].width
         self.row_stride = self.height + self.params.opening_kernel // 2
-        self.rectifier = Rectifier.build(self.cameras, self.row_stride)
+        if rectifier is None:
+            rectifier = Rectifier.build(self.cameras, self.row_stride)
+        self.rectifier = rectifier
         self._buf = np.zeros((self.n_cams, self.row_stride, self.width), np.uint8)
         self._terms: AngleTerms | None = None
         self._state = None
-        if background is not None:
-            self.set_background(background)
 
     @property
     def n_cams(self) -> int:

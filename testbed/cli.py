@@ -16,6 +16,8 @@ import sys
 COMMANDS = (
     "testbed.commands.render",
     "testbed.commands.study",
+    "testbed.commands.scanlines",
+    "testbed.commands.tune",
 )
 
 

@@ -1,0 +1,80 @@
+"""Search the pipeline parameters with Optuna to maximise scanline F1 (TPE, seeded).
+
+The objective is deterministic, and the sampler is ``TPESampler(seed=seed)`` run in one
+process, so the same data and seed give the same trials and the same best parameters.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .params import PipelineParams
+from .runs import scanline_f1
+
+#: Search space: name -> (kind, low, high[, step]).
+SPACE = {
+    "threshold_deg": ("float", 1.0, 30.0),
+    "brightness_floor": ("float", 0.0, 80.0),
+    "dark_delta": ("float", 5.0, 120.0),
+    "opening_kernel": ("int", 1, 9, 2),
+    "spatial_kernel": ("int", 1, 15, 2),
+    "temporal_alpha": ("float", 0.3, 1.0),
+    "median_kernel": ("int", 1, 15, 2),
+    "column_threshold": ("float", 1.0, 60.0),
+}
+
+
+@dataclass(frozen=True)
+class TuneResult:
+    """best : PipelineParams; best_f1 : float; baseline_f1 : F1 of the starting parameters;
+    f1 : (n_trials,) float, F1 of each trial in order."""
+
+    best: PipelineParams
+    best_f1: float
+    baseline_f1: float
+    f1: np.ndarray
+
+
+def suggest(trial) -> PipelineParams:
+    """Parameters drawn by an Optuna trial from :data:`SPACE`."""
+    values = {}
+    for name, (kind, low, high, *step) in SPACE.items():
+        if kind == "int":
+            values[name] = trial.suggest_int(name, low, high, step=step[0])
+        else:
+            values[name] = trial.suggest_float(name, low, high)
+    return PipelineParams(**values)
+
+
+def tune(cameras, background, frames, gt_scanlines, n_trials: int, seed: int = 0,
+         start: PipelineParams | None = None, progress: Callable[[float], None] | None = None) -> TuneResult:
+    """Maximise scanline F1 over ``n_trials`` Optuna trials, the first being ``start``.
+
+    background : (n_cams, H, W, 3) uint8 or float32 model
+    frames : (n_frames, n_cams, H, W, 3) uint8; gt_scanlines : (n_frames, n_cams, W) bool
+    progress : called with each trial's F1
+    """
+    import optuna
+
+    if n_trials < 1:
+        raise ValueError(f"trials: expected an integer >= 1, got {n_trials}")
+    start = PipelineParams() if start is None else start
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    cache: dict = {}
+    study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
+    study.enqueue_trial({k: getattr(start, k) for k in SPACE})
+    f1s = []
+
+    def objective(trial):
+        f1 = scanline_f1(cameras, background, frames, gt_scanlines, suggest(trial), cache)
+        f1s.append(f1)
+        if progress is not None:
+            progress(f1)
+        return f1
+
+    study.optimize(objective, n_trials=n_trials)
+    best = PipelineParams(**study.best_params)
+    return TuneResult(best, float(study.best_value), f1s[0], np.array(f1s))

@@ -1,0 +1,115 @@
+"""``camtask scanlines``: frames to scanlines for a render directory or a video.
+
+    camtask scanlines DIR [--params FILE] [--frames N] [--out FILE] [--json]
+    camtask scanlines --video FILE --calibration cam.yaml --background N [--out FILE.npz]
+
+A render directory gives ``DIR/scanlines.npz`` (``scanlines``, ``gt_scanlines``
+(n_frames, n_cams, W) bool, ``bearings`` (n_cams, W) float radians) and the CDnet metrics
+of the scanline columns and of the foreground pixels. A video (or a folder of images,
+sorted) gives ``scanlines`` (n_frames, 1, W) and ``bearings`` (1, W); its first N frames
+are the background. Files are written atomically, only when the run completes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser("scanlines", help="frames to 640-bit scanlines, with metrics",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("dir", nargs="?", help="render directory (from `camtask render`)")
+    p.add_argument("--params", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
+    p.add_argument("--frames", type=int, help="process at most this many frames")
+    p.add_argument("--out", help="output .npz (default DIR/scanlines.npz, or VIDEO_scanlines.npz)")
+    p.add_argument("--json", action="store_true", help="print the metrics as one JSON document")
+    p.add_argument("--video", help="video file or folder of images instead of a render directory")
+    p.add_argument("--calibration", help="camera calibration (OpenCV YAML) for --video")
+    p.add_argument("--background", type=int, help="number of leading --video frames that are background")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from testbed.cli import UsageError
+    from pipeline.params import load_params
+
+    params = load_params(args.params)
+    if args.frames is not None and args.frames < 1:
+        raise ValueError(f"--frames: expected an integer >= 1, got {args.frames}")
+    if args.video is not None:
+        if args.dir is not None:
+            raise UsageError("give either DIR or --video, not both")
+        if args.calibration is None or args.background is None:
+            raise UsageError("--video needs --calibration FILE and --background N")
+        return _run_video(args, params)
+    if args.dir is None:
+        raise UsageError("expected a render directory DIR, or --video FILE")
+    return _run_render(args, params)
+
+
+def _run_render(args, params) -> int:
+    from pipeline.core import Pipeline
+    from pipeline.io import RenderDir, save_npz_atomic
+    from pipeline.runs import run_sequence
+
+    render = RenderDir(args.dir)
+    n = len(render) if args.frames is None else min(args.frames, len(render))
+    pipe = Pipeline(render.cameras, params, render.background())
+    out = Path(args.out) if args.out else render.root / "scanlines.npz"
+    with tqdm(total=n, desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
+        result = run_sequence(pipe, (render.frames(i) for i in range(n)),
+                              (render.labels(i) for i in range(n)), progress=lambda: bar.update())
+    save_npz_atomic(out, scanlines=result.scanlines, gt_scanlines=result.gt_scanlines,
+                    bearings=result.bearings, camera_numbers=np.array([c.number for c in render.cameras]))
+    metrics = result.metrics() | {"params": params.to_dict(), "out": str(out)}
+    _report(metrics, [c.number for c in render.cameras], args.json)
+    return 0
+
+
+def _run_video(args, params) -> int:
+    from pipeline.core import Pipeline
+    from pipeline.io import iter_video_frames, load_calibration, save_npz_atomic
+    from pipeline.runs import run_sequence
+
+    if args.background < 1:
+        raise ValueError(f"--background: expected an integer >= 1, got {args.background}")
+    cam = load_calibration(args.calibration)
+    source = Path(args.video)
+    frames = iter_video_frames(source)
+    bg = list(itertools.islice(frames, args.background))
+    if len(bg) < args.background:
+        raise ValueError(f"--background: expected at least {args.background} frames, the video has {len(bg)}")
+    pipe = Pipeline([cam], params, np.stack(bg)[:, None])
+    rest = (f[None] for f in itertools.islice(frames, args.frames))
+    with tqdm(desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
+        result = run_sequence(pipe, rest, progress=lambda: bar.update())
+    out = Path(args.out) if args.out else source.with_name(f"{source.stem}_scanlines.npz")
+    save_npz_atomic(out, scanlines=result.scanlines, bearings=result.bearings,
+                    camera_numbers=np.array([cam.number]))
+    _report(result.metrics() | {"params": params.to_dict(), "out": str(out)}, [cam.number], args.json)
+    return 0
+
+
+def _report(m: dict, numbers, as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(m))
+        return
+    print(f"{m['frames']} frames x {m['cameras']} cameras -> {m['out']}")
+    print(f"bandwidth: RLE {m['rle_bits_mean']:.1f} bits per scanline on average "
+          f"(max {m['rle_bits_max']}), raw {m['raw_bits']}")
+    if "f1" not in m:
+        return
+    print(f"{'camera':>8} {'precision':>9} {'recall':>7} {'F1':>6} {'PWC':>6} {'pixel F1':>9}")
+    for num, c, px in zip(numbers, m["per_camera"], m["pixel"]["per_camera"]):
+        print(f"{num:>8} {c['precision']:9.3f} {c['recall']:7.3f} {c['f1']:6.3f} {c['pwc']:6.2f} {px['f1']:9.3f}")
+    px = m["pixel"]
+    print(f"{'all':>8} {m['precision']:9.3f} {m['recall']:7.3f} {m['f1']:6.3f} {m['pwc']:6.2f} {px['f1']:9.3f}")
+    print(f"pixels: precision {px['precision']:.3f} recall {px['recall']:.3f} F1 {px['f1']:.3f} "
+          f"PWC {px['pwc']:.2f}")
