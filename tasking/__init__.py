@@ -4,6 +4,7 @@ Imports only numpy, scipy, shapely and scikit-learn; never a GL library.
 """
 
 from .checks import check_choice
+from .clustering import clustering_select
 from .hull import (
     camera_regions_from_discs,
     camera_regions_from_scanlines,
@@ -17,8 +18,29 @@ from .hull import (
     visual_hull_of_discs,
     visual_hull_of_scanlines,
 )
+from .taskers import (
+    TASKERS,
+    IncrementalTasker,
+    choose_cameras,
+    greedy_select,
+    incremental_select,
+    lazy_greedy_select,
+    naive_greedy_select,
+    optimal_select,
+    uniform_select,
+)
 
 __all__ = [
+    "TASKERS",
+    "IncrementalTasker",
+    "choose_cameras",
+    "clustering_select",
+    "greedy_select",
+    "incremental_select",
+    "lazy_greedy_select",
+    "naive_greedy_select",
+    "optimal_select",
+    "uniform_select",
     "check_choice",
     "camera_regions_from_discs",
     "camera_regions_from_scanlines",

@@ -1,0 +1,103 @@
+"""Clustering tasker (paper section 4.2): camera directions from object-pair directions.
+
+For every pair of estimated object centres the direction of the connecting vector
+``v_ij`` and of its perpendicular are collected, modulo pi (a camera looking along ``d``
+and along ``d + pi`` is equally parallel to ``v_ij``). k-means on these axial angles
+gives k directions; the camera whose viewing direction (modulo pi) is nearest each
+cluster centre is tasked, without duplicates.
+
+Axial angles wrap at pi, so k-means runs on the doubled-angle embedding
+``(cos 2θ, sin 2θ)``, where 0 and pi coincide.
+
+>>> yaw = np.radians([0.0, 45.0, 90.0, 135.0])
+>>> clustering_select(yaw, np.array([[0.0, 0.0], [1.0, 0.0]]), 2, seed=0).tolist()
+[0, 2]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from sklearn.cluster import KMeans
+
+__all__ = ["pair_axes", "cluster_axes", "axial_distance", "clustering_select"]
+
+
+def axial_distance(a, b):
+    """Distance between axial angles (radians, modulo pi), in ``[0, pi/2]``."""
+    d = (np.asarray(a, dtype=float) - np.asarray(b, dtype=float)) % np.pi
+    return np.minimum(d, np.pi - d)
+
+
+def pair_axes(estimates: np.ndarray) -> np.ndarray:
+    """Axial angles of every pair vector and its perpendicular.
+
+    Parameters
+    ----------
+    estimates : (p, 2) float, metres, world frame
+
+    Returns
+    -------
+    (2 * q,) float, radians in ``[0, pi)``; q pairs with distinct centres.
+    """
+    i, j = np.triu_indices(estimates.shape[0], 1)
+    v = estimates[j] - estimates[i]
+    v = v[np.hypot(v[:, 0], v[:, 1]) > 1e-12]
+    theta = np.arctan2(v[:, 1], v[:, 0]) % np.pi
+    return np.concatenate([theta, (theta + np.pi / 2) % np.pi])
+
+
+def cluster_axes(axes: np.ndarray, k: int, seed: int):
+    """k-means of axial angles on the doubled-angle circle.
+
+    Parameters
+    ----------
+    axes : (s,) float, radians modulo pi, s >= 1
+    k : wanted number of clusters (fewer when there are fewer distinct angles)
+    seed : int, k-means random_state
+
+    Returns
+    -------
+    centres : (c,) float, radians in ``[0, pi)``, ordered by cluster size, largest first
+    sizes : (c,) int
+    """
+    feats = np.c_[np.cos(2 * axes), np.sin(2 * axes)]
+    distinct = np.unique(np.round(feats, 12), axis=0).shape[0]
+    c = min(k, distinct)
+    km = KMeans(n_clusters=c, n_init=10, random_state=seed).fit(feats)
+    centres = (np.arctan2(km.cluster_centers_[:, 1], km.cluster_centers_[:, 0]) / 2) % np.pi
+    sizes = np.bincount(km.labels_, minlength=c)
+    order = np.lexsort((centres, -sizes))
+    return centres[order], sizes[order]
+
+
+def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:
+    """Cameras whose viewing axes best match the k-means pair directions.
+
+    Cluster centres take turns, largest cluster first, each picking its nearest unused
+    camera (ties: lowest index), until k cameras are chosen; with fewer distinct pair
+    directions than k, centres pick again in the same order.
+
+    Parameters
+    ----------
+    camera_yaw : (N,) float, radians, world frame
+    estimates : (p, 2) float, metres, world frame, p >= 2
+    k : number of cameras, 1 <= k <= N
+    seed : int, k-means random_state
+
+    Returns
+    -------
+    (k,) int, sorted 0-based camera indices.
+    """
+    centres, _ = cluster_axes(pair_axes(estimates), k, seed)
+    axis = np.asarray(camera_yaw, dtype=float) % np.pi
+    used = np.zeros(axis.size, dtype=bool)
+    chosen: list[int] = []
+    while len(chosen) < k:
+        for phi in centres:
+            if len(chosen) == k:
+                break
+            dist = np.where(used, np.inf, axial_distance(axis, phi))
+            best = int(np.argmin(dist))
+            used[best] = True
+            chosen.append(best)
+    return np.sort(np.array(chosen, dtype=np.intp))

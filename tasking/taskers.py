@@ -1,0 +1,327 @@
+"""Taskers: choose k of N cameras to minimise the visual hull area of estimated discs.
+
+Every tasker works on the cameras' free wedges (what each camera would prove empty,
+:func:`tasking.hull.free_wedges_from_discs`) for discs of ``radius`` at the estimated
+object centres. The hull of a set S is ``room - union(wedges[S])``, so
+
+* adding camera c to a set with hull H gives ``H - wedges[c]``: one difference, and the
+  area it removes, ``area(H ∩ wedges[c])``, is the *gain* of c;
+* the removed area is a coverage function (monotone, submodular): gains only shrink as
+  H shrinks, which is what lazy (CELF) greedy relies on.
+
+Greedy and lazy greedy compute gains with the same GEOS operation on the same hull, so
+they see identical floating-point numbers and make the identical choice (ties go to the
+lowest camera index). Areas are of the raw hull, before small-polygon removal.
+
+>>> from shapely.geometry import Point
+>>> room = Point(0, 0).buffer(1.0, quad_segs=32)
+>>> th = 2 * np.pi * np.arange(8) / 8
+>>> xy, yaw = np.c_[np.cos(th), np.sin(th)], th + np.pi
+>>> choose_cameras("uniform", 4, xy, yaw, np.pi, [[0.3, 0.0]], 0.1, room).tolist()
+[0, 2, 4, 6]
+>>> g = choose_cameras("greedy", 3, xy, yaw, np.pi, [[0.3, 0.0], [-0.4, 0.2]], 0.1, room)
+>>> bool(np.all(g == choose_cameras("lazy_greedy", 3, xy, yaw, np.pi,
+...                                  [[0.3, 0.0], [-0.4, 0.2]], 0.1, room)))
+True
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections.abc import Mapping
+from math import comb
+
+import numpy as np
+import shapely
+from shapely.geometry import Polygon
+
+from .checks import check_choice, check_indices, check_int, check_points, check_radii
+from .clustering import clustering_select, pair_axes
+from .coverage import coverage_cells, optimal_subset
+from .hull import free_wedges_from_discs, hull_from_wedges
+
+__all__ = [
+    "TASKERS",
+    "choose_cameras",
+    "uniform_select",
+    "greedy_select",
+    "lazy_greedy_select",
+    "naive_greedy_select",
+    "optimal_select",
+    "greedy_remove",
+    "incremental_select",
+    "IncrementalTasker",
+]
+
+TASKERS = ("uniform", "clustering", "optimal", "greedy", "lazy_greedy", "incremental")
+
+#: Gains within this fraction of the room's area count as possibly equal in lazy greedy's
+#: staleness test (far above floating-point noise, far below any real gain difference).
+LAZY_TOL = 1e-9
+
+
+def _gains(hull, wedges: np.ndarray) -> np.ndarray:
+    """Area each wedge set would remove from ``hull``: (c,) float, m^2."""
+    return shapely.area(shapely.intersection(hull, wedges))
+
+
+def uniform_select(n: int, k: int) -> np.ndarray:
+    """Evenly spread indices ``floor(i * n / k + 1/2)``, i = 0..k-1.
+
+    >>> uniform_select(16, 5).tolist()
+    [0, 3, 6, 10, 13]
+    """
+    return np.floor(np.arange(k) * n / k + 0.5).astype(np.intp)
+
+
+def greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
+    """Paper algorithm 4.4: add k cameras one at a time, each minimising the hull area.
+
+    Parameters
+    ----------
+    wedges : (N,) object array of MultiPolygons, free wedges per camera
+    room : shapely Polygon
+    k : number of cameras to add
+    start : sequence of camera indices already tasked (not candidates)
+    hull : hull of ``start`` if known (default: recomputed)
+
+    Returns
+    -------
+    chosen : list of k ints, in the order added
+    hull : shapely geometry, the hull of ``start`` plus ``chosen``
+    """
+    wedges = np.asarray(wedges, dtype=object)
+    avail = np.ones(wedges.size, dtype=bool)
+    avail[list(start)] = False
+    h = hull_from_wedges(wedges, room, list(start)) if hull is None else hull
+    chosen = []
+    for _ in range(k):
+        cand = np.flatnonzero(avail)
+        best = int(cand[np.argmax(_gains(h, wedges[cand]))])  # first max: lowest index
+        h = h.difference(wedges[best])
+        avail[best] = False
+        chosen.append(best)
+    return chosen, h
+
+
+def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
+    """Lazy (CELF) greedy: the same choice as :func:`greedy_select`, fewer evaluations.
+
+    Stale gains are upper bounds (submodularity). A freshly evaluated camera is taken
+    only when every stale bound is below its gain by more than ``LAZY_TOL * room.area``;
+    stale cameras within that margin are re-evaluated first, so floating-point noise
+    cannot change the choice. Same parameters and returns as :func:`greedy_select`.
+    """
+    wedges = np.asarray(wedges, dtype=object)
+    h = hull_from_wedges(wedges, room, list(start)) if hull is None else hull
+    taken = set(int(s) for s in start)
+    cand = np.array([c for c in range(wedges.size) if c not in taken], dtype=np.intp)
+    if k == 0:
+        return [], h
+    tol = LAZY_TOL * room.area
+    gains = _gains(h, wedges[cand])
+    heap = [(-float(g), int(c), 0) for g, c in zip(gains, cand)]
+    heapq.heapify(heap)
+    chosen = []
+    for rnd in range(k):
+        while True:
+            neg, c, stamp = heapq.heappop(heap)
+            if stamp != rnd:
+                g = float(shapely.area(shapely.intersection(h, wedges[c])))
+                heapq.heappush(heap, (-g, c, rnd))
+                continue
+            # c is fresh and on top; every entry within tol of its gain must be fresh too
+            near = []
+            while heap and -heap[0][0] >= -neg - tol:
+                near.append(heapq.heappop(heap))
+            stale = [e for e in near if e[2] != rnd]
+            for e in near:
+                if e[2] == rnd:
+                    heapq.heappush(heap, e)
+                else:
+                    g = float(shapely.area(shapely.intersection(h, wedges[e[1]])))
+                    heapq.heappush(heap, (-g, e[1], rnd))
+            if not stale:
+                break
+            heapq.heappush(heap, (neg, c, stamp))
+        h = h.difference(wedges[c])
+        chosen.append(c)
+    return chosen, h
+
+
+def naive_greedy_select(wedges, room: Polygon, k: int) -> list:
+    """Reference greedy that recomputes every candidate hull from scratch (benchmarks)."""
+    chosen: list[int] = []
+    for _ in range(k):
+        best, best_area = -1, np.inf
+        for c in range(len(wedges)):
+            if c in chosen:
+                continue
+            area = hull_from_wedges(wedges, room, chosen + [c]).area
+            if area < best_area:
+                best, best_area = c, area
+        chosen.append(best)
+    return chosen
+
+
+def optimal_select(wedges, room: Polygon, k: int) -> list:
+    """Paper section 4.3: the k-subset with the smallest hull, by exhaustive search.
+
+    Every one of the C(N, k) subsets is scored, but through the coverage table of
+    :mod:`tasking.coverage` (a bitmask AND per subset) rather than a polygon overlay.
+    Ties go to the first subset in lexicographic order.
+
+    Returns
+    -------
+    list of k ints, sorted.
+    """
+    return optimal_subset(coverage_cells(wedges, room), k)
+
+
+def greedy_remove(wedges, room: Polygon, current, m: int):
+    """Remove m cameras one at a time, each time the one whose removal grows the hull least.
+
+    Hulls without each camera come from prefix and suffix hulls of the current set:
+    ``hull(S - s_i) = P_{i-1} ∩ Q_{i+1}``, 3|S| operations per removal.
+
+    Returns
+    -------
+    kept : list of ints (ascending), removed : list of m ints, hull : hull of ``kept``
+    """
+    wedges = np.asarray(wedges, dtype=object)
+    kept = sorted(int(c) for c in current)
+    removed = []
+    h = None
+    for _ in range(m):
+        s = len(kept)
+        prefix = [room]
+        for c in kept:
+            prefix.append(prefix[-1].difference(wedges[c]))
+        suffix = [room]
+        for c in reversed(kept):
+            suffix.append(suffix[-1].difference(wedges[c]))
+        suffix = suffix[::-1]  # suffix[i] = hull of kept[i:]
+        without = shapely.intersection(np.array(prefix[:s], dtype=object),
+                                       np.array(suffix[1:], dtype=object))
+        i = int(np.argmin(shapely.area(without)))  # ties: lowest index
+        removed.append(kept.pop(i))
+        h = without[i]
+    return kept, removed, h
+
+
+def incremental_select(wedges, room: Polygon, current, m: int) -> list:
+    """Paper section 4.5: greedily remove m of the current cameras, then add m greedily.
+
+    Returns
+    -------
+    list of ints, sorted, the same size as ``current``.
+    """
+    kept, _, h = greedy_remove(wedges, room, current, m)
+    added, _ = lazy_greedy_select(wedges, room, m, start=kept, hull=h)
+    return sorted(kept + added)
+
+
+def choose_cameras(
+    tasker: str,
+    k: int,
+    camera_xy,
+    camera_yaw,
+    fov,
+    estimates,
+    radius,
+    room,
+    *,
+    current=None,
+    m: int = 1,
+    uniform_sets: Mapping | None = None,
+    max_subsets: int = 200_000,
+    rng: np.random.Generator | None = None,
+) -> np.ndarray:
+    """Choose k of N cameras with one of :data:`TASKERS`.
+
+    Parameters
+    ----------
+    tasker : one of ``TASKERS``
+    k : number of cameras, 1 <= k <= N
+    camera_xy : (N, 2) float, metres, world frame
+    camera_yaw : (N,) float, radians, world-frame viewing direction
+    fov : float or (N,) float, radians, in (0, 2*pi)
+    estimates : (p, 2) float, metres, world frame, estimated object centres (p may be 0);
+        modelled as discs of ``radius`` that may overlap
+    radius : float or (p,) float, metres
+    room : shapely Polygon
+    current : (k,) int, 0-based indices tasked now (incremental; None -> greedy)
+    m : cameras swapped per incremental update, 1 <= m <= k
+    uniform_sets : mapping k -> k 0-based indices for the uniform tasker (e.g. the lab's
+        paper lists); without an entry, ``uniform_select(N, k)``
+    max_subsets : the optimal tasker refuses when C(N, k) exceeds this
+    rng : numpy Generator seeding k-means (clustering); None -> seed 0
+
+    Returns
+    -------
+    (k,) int, sorted ascending 0-based camera indices.
+    """
+    check_choice("tasker", tasker, TASKERS)
+    camera_xy = check_points("camera_xy", camera_xy)
+    n = camera_xy.shape[0]
+    k = check_int("k", k, 1, n)
+    m = check_int("m", m, 1, k)
+    estimates = check_points("estimates", estimates, allow_empty=True)
+    check_radii("radius", radius, estimates.shape[0])
+    if rng is not None and not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng must be a numpy Generator or None; got {type(rng).__name__}")
+    if current is not None:
+        current = check_indices("current", current, n, size=k)
+    # all geometry validation (yaw, fov, room, finite values) happens here
+    wedges = free_wedges_from_discs(camera_xy, camera_yaw, fov, estimates, radius, room,
+                                    strict=False)
+    if tasker == "clustering" and pair_axes(estimates).size:
+        seed = 0 if rng is None else int(rng.integers(2**31 - 1))
+        return clustering_select(camera_yaw, estimates, k, seed)
+    if tasker in ("uniform", "clustering"):
+        if uniform_sets is not None and k in uniform_sets:
+            return check_indices(f"uniform_sets[{k}]", uniform_sets[k], n, size=k)
+        return uniform_select(n, k)
+    if tasker == "optimal":
+        count = comb(n, k)
+        if count > max_subsets:
+            raise ValueError(
+                f"max_subsets: optimal needs C({n}, {k}) = {count} hulls; limit {max_subsets}"
+            )
+        return np.array(optimal_select(wedges, room, k), dtype=np.intp)
+    if tasker == "incremental" and current is not None:
+        return np.array(incremental_select(wedges, room, current, m), dtype=np.intp)
+    if tasker == "greedy":
+        chosen, _ = greedy_select(wedges, room, k)
+    else:  # lazy_greedy, or incremental without a current set
+        chosen, _ = lazy_greedy_select(wedges, room, k)
+    return np.sort(np.array(chosen, dtype=np.intp))
+
+
+class IncrementalTasker:
+    """Incremental greedy on a schedule: greedy at first, then swap m every u frames.
+
+    Holds configuration and the last selection only; the geometry is in the functions.
+
+    Parameters
+    ----------
+    k : cameras tasked
+    m : cameras swapped per update, 1 <= m <= k
+    update_every : update on frames whose index is a multiple of this (>= 1)
+    """
+
+    def __init__(self, k: int, m: int = 1, update_every: int = 1):
+        self.k = check_int("k", k, 1)
+        self.m = check_int("m", m, 1, self.k)
+        self.update_every = check_int("update_every", update_every, 1)
+        self.current: np.ndarray | None = None
+
+    def step(self, frame_index: int, camera_xy, camera_yaw, fov, estimates, radius, room):
+        """Cameras to task for this frame: (k,) int, sorted 0-based indices."""
+        frame_index = check_int("frame_index", frame_index, 0)
+        if self.current is None or frame_index % self.update_every == 0:
+            self.current = choose_cameras(
+                "incremental", self.k, camera_xy, camera_yaw, fov, estimates, radius, room,
+                current=self.current, m=self.m,
+            )
+        return self.current.copy()
