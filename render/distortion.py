@@ -1,0 +1,105 @@
+"""Lens distortion applied to ideal pinhole renders with ``cv2.remap``.
+
+The renderer draws the ideal pinhole image on a slightly larger canvas (barrel
+distortion pulls the corners of the real image from beyond the ideal frame), then
+resamples it: for every pixel (u_d, v_d) of the distorted output image the map holds
+the ideal pinhole pixel that shows the same ray,
+``K_canvas @ undistort(K^-1 (u_d, v_d, 1))``. That is ``cv2.undistortPoints`` applied to
+the output pixel grid (an iterative inverse of the distortion model), *not*
+``cv2.initUndistortRectifyMap``, whose map goes the other way (for each undistorted
+pixel, where it lies in the distorted image). With this map a world point projected
+by ``cv2.projectPoints(K, dist)`` lands on its rendered image.
+
+>>> import numpy as np
+>>> K = np.array([[500.0, 0, 319.5], [0, 500.0, 239.5], [0, 0, 1]])
+>>> d = distortion_maps(K, np.zeros(5), 640, 480)
+>>> d.canvas_size, d.offset
+((640, 480), (0, 0))
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from scene.checks import check_array
+
+
+@dataclass(frozen=True, eq=False)
+class DistortionMaps:
+    """Per-camera resampling from the ideal canvas to the distorted image.
+
+    canvas_size : (width, height) of the ideal pinhole canvas, pixels
+    offset : (du, dv) pixels, where the output image's principal point moved on the
+        canvas: ``K_canvas = K`` with ``cx + du``, ``cy + dv``
+    map_xy : (H, W, 2) float32, canvas pixel (u, v) for each output pixel (row, col)
+    fixed : the same map converted by ``cv2.convertMaps`` for fast bilinear remapping
+    nearest : the map rounded to whole pixels (CV_16SC2), for label images
+    identity : True when there is no distortion (remapping is skipped)
+    """
+
+    canvas_size: tuple[int, int]
+    offset: tuple[int, int]
+    map_xy: np.ndarray
+    fixed: tuple
+    nearest: np.ndarray | None
+    identity: bool
+
+    def canvas_K(self, K) -> np.ndarray:
+        """The ideal canvas's camera matrix, (3, 3) pixels."""
+        Kc = np.array(K, float)
+        Kc[0, 2] += self.offset[0]
+        Kc[1, 2] += self.offset[1]
+        return Kc
+
+
+def ideal_pixels(K, dist, width: int, height: int) -> np.ndarray:
+    """Ideal (undistorted) pixel (u, v) of every distorted pixel, (H, W, 2) float64."""
+    K = check_array("K", K, (3, 3))
+    dist = check_array("dist", dist, (5,))
+    v, u = np.mgrid[0:height, 0:width].astype(np.float64)
+    pts = np.stack([u.ravel(), v.ravel()], axis=1)[:, None, :]
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
+    ideal = cv2.undistortPoints(pts, K, dist, R=None, P=K, criteria=criteria)
+    return ideal.reshape(height, width, 2)
+
+
+def distortion_maps(K, dist, width: int, height: int, margin: int = 2) -> DistortionMaps:
+    """Maps that turn an ideal canvas render into the distorted ``width`` x ``height`` image."""
+    dist = check_array("dist", dist, (5,))
+    if not np.any(dist):
+        v, u = np.mgrid[0:height, 0:width].astype(np.float32)
+        xy = np.stack([u, v], axis=-1)
+        return DistortionMaps((width, height), (0, 0), xy, (None, None), None, True)
+    ideal = ideal_pixels(K, dist, width, height)
+    lo = np.floor(ideal.reshape(-1, 2).min(axis=0)) - margin
+    hi = np.ceil(ideal.reshape(-1, 2).max(axis=0)) + margin
+    du = int(max(0, -lo[0]))
+    dv = int(max(0, -lo[1]))
+    canvas = (int(max(width, hi[0] + 1)) + du, int(max(height, hi[1] + 1)) + dv)
+    xy = (ideal + np.array([du, dv])).astype(np.float32)
+    fixed = cv2.convertMaps(xy[..., 0], xy[..., 1], cv2.CV_16SC2)
+    nearest = cv2.convertMaps(xy[..., 0], xy[..., 1], cv2.CV_16SC2, nninterpolation=True)[0]
+    return DistortionMaps(canvas, (du, dv), xy, fixed, nearest, False)
+
+
+def distort(canvas: np.ndarray, maps: DistortionMaps, out: np.ndarray | None = None,
+            nearest: bool = False) -> np.ndarray:
+    """Resample one ideal ``canvas`` (Hc, Wc[, C]) to the distorted image (H, W[, C]).
+
+    Bilinear for colour; ``nearest`` for label images (no blended labels).
+    """
+    H, W = maps.map_xy.shape[:2]
+    if maps.identity:
+        view = canvas[:H, :W]
+        if out is None:
+            return view.copy()
+        out[...] = view
+        return out
+    if nearest:
+        return cv2.remap(canvas, maps.nearest, None, cv2.INTER_NEAREST, dst=out,
+                         borderMode=cv2.BORDER_REPLICATE)
+    return cv2.remap(canvas, maps.fixed[0], maps.fixed[1], cv2.INTER_LINEAR, dst=out,
+                     borderMode=cv2.BORDER_REPLICATE)

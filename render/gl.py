@@ -1,0 +1,155 @@
+"""The one place that chooses the OpenGL backend and imports pyrender / PyOpenGL.
+
+PyOpenGL fixes its platform (EGL, OSMesa, GLX) when ``OpenGL`` is first imported, from
+the ``PYOPENGL_PLATFORM`` environment variable. This module sets that variable and only
+then imports ``pyrender`` and ``OpenGL.GL``; nothing else in the package imports them
+directly. One off-screen context is created per process and reused by every renderer:
+on EGL, deleting one pyrender context tears down the display the others share.
+
+Backends: ``"egl"`` (default, Mesa llvmpipe without a display) and ``"osmesa"`` (pure
+software fallback). When the configured backend's libraries are missing the other is
+tried; when neither works, :class:`BackendError` names the missing library and the
+``apt-get`` line that installs it.
+
+Mesa's llvmpipe uses as many threads as cores unless ``LP_NUM_THREADS`` is set in the
+environment; that is the caller's choice and is never forced here.
+
+>>> check_backend("egl")
+'egl'
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import os
+import sys
+from types import ModuleType
+
+from scene.checks import check_choice
+
+BACKENDS = ("egl", "osmesa")
+
+#: The Debian/Ubuntu packages each backend needs.
+APT_LINES = {
+    "egl": "apt-get install -y libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libxrender1",
+    "osmesa": "apt-get install -y libosmesa6",
+}
+
+#: Shared libraries each backend loads (sonames tried in order).
+LIBRARIES = {
+    "egl": (("libEGL.so.1", "libEGL.so", "EGL"), ("libGL.so.1", "libGL.so", "GL")),
+    "osmesa": (("libOSMesa.so.8", "libOSMesa.so.6", "libOSMesa.so", "OSMesa"),),
+}
+
+
+class BackendError(RuntimeError):
+    """No usable OpenGL backend; the message says what to install."""
+
+
+def check_backend(backend: str) -> str:
+    """Return ``backend`` if it is a known backend, else raise listing them."""
+    return check_choice("render.backend", backend, BACKENDS)
+
+
+def _load_library(names: tuple[str, ...]) -> str | None:
+    """Load the first loadable soname of ``names``; None when none loads."""
+    for name in names:
+        path = name if name.startswith("lib") else ctypes.util.find_library(name)
+        if not path:
+            continue
+        try:
+            ctypes.CDLL(path)
+            return path
+        except OSError:
+            continue
+    return None
+
+
+def probe(backend: str) -> str | None:
+    """None when ``backend``'s libraries load, else the name of the missing library."""
+    for names in LIBRARIES[backend]:
+        if _load_library(names) is None:
+            return names[0]
+    return None
+
+
+def _imported_platform() -> str | None:
+    """The platform PyOpenGL was already imported with, or None if not yet imported."""
+    if "OpenGL" not in sys.modules:
+        return None
+    return os.environ.get("PYOPENGL_PLATFORM", "glx").lower()
+
+
+def _failure(tried: list[tuple[str, str]]) -> BackendError:
+    lines = [f"no usable OpenGL backend for off-screen rendering:"]
+    for backend, why in tried:
+        lines.append(f"  {backend}: {why}; install it with: {APT_LINES[backend]}")
+    return BackendError("\n".join(lines))
+
+
+_CONTEXT = None  # (backend, platform) of this process; created once, never deleted
+
+
+def select_backend(preferred: str = "egl") -> str:
+    """The backend to use: ``preferred`` if its libraries load, else the other one.
+
+    Raises :class:`BackendError` naming the missing libraries and the apt-get lines.
+    """
+    preferred = check_backend(preferred)
+    if _CONTEXT is not None:
+        return _CONTEXT[0]
+    order = [preferred] + [b for b in BACKENDS if b != preferred]
+    already = _imported_platform()
+    tried = []
+    for backend in order:
+        if already is not None and already != backend:
+            tried.append((backend, f"PyOpenGL was already imported with PYOPENGL_PLATFORM={already}"))
+            continue
+        missing = probe(backend)
+        if missing is None:
+            return backend
+        tried.append((backend, f"cannot load {missing}"))
+    raise _failure(tried)
+
+
+def context(preferred: str = "egl"):
+    """Make this process's off-screen OpenGL context current and return ``(backend, GL)``.
+
+    The context is created on first use (a 1x1 default surface; renderers draw into
+    their own framebuffer objects) and reused for the life of the process.
+    """
+    global _CONTEXT
+    if _CONTEXT is None:
+        backend = select_backend(preferred)
+        os.environ["PYOPENGL_PLATFORM"] = backend
+        try:
+            if backend == "egl":
+                from pyrender.platforms import egl
+                platform = egl.EGLPlatform(1, 1, device=egl.get_default_device())
+            else:
+                from pyrender.platforms.osmesa import OSMesaPlatform
+                platform = OSMesaPlatform(1, 1)
+            platform.init_context()
+        except Exception as exc:  # the library loaded but no context could be made
+            raise _failure([(backend, f"context creation failed ({type(exc).__name__}: {exc})")]) from exc
+        _CONTEXT = (backend, platform)
+    backend, platform = _CONTEXT
+    platform.make_current()
+    return backend, GL()
+
+
+def GL() -> ModuleType:
+    """The ``OpenGL.GL`` module (import only after :func:`context`)."""
+    import OpenGL.GL
+
+    return OpenGL.GL
+
+
+def pyrender() -> ModuleType:
+    """The ``pyrender`` module, imported with the process's backend selected."""
+    if _CONTEXT is None and _imported_platform() is None:
+        os.environ["PYOPENGL_PLATFORM"] = select_backend("egl")
+    import pyrender as _pyrender
+
+    return _pyrender

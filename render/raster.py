@@ -1,0 +1,193 @@
+"""A minimal OpenGL 3.3 rasteriser for pre-shaded triangle soups, many cameras per pass.
+
+One vertex buffer holds the room and every person (people at their origin); one
+uniform array moves the people, so nothing is re-uploaded when they walk. Each camera
+draws into its own horizontal band of one tall framebuffer (RGBA8 + depth), upside
+down so that ``glReadPixels`` returns rows top first, and one ``glReadPixels`` reads
+all cameras at once into a preallocated ``(n_cams, H, W, 4)`` array: RGB is the baked
+vertex colour, interpolated across the triangle; alpha is the exact label (person
+index + 1, 0 for the room), written from a ``flat`` varying. No lighting, no MSAA, no
+blending, no face culling.
+
+The context comes from :func:`render.gl.context` (one per process, shared).
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from . import gl
+from .geometry import Mesh
+
+VERTEX_SHADER = """#version 330 core
+layout(location = 0) in vec3 position;   // metres, world frame (people: at their feet)
+layout(location = 1) in vec3 colour;     // shaded RGB in [0, 1]
+layout(location = 2) in float person;    // person index, -1 for the room
+uniform mat4 view_proj;
+uniform vec2 offsets[%(n)d];             // people's floor positions, metres
+out vec3 v_colour;
+flat out float v_label;
+void main() {
+    vec3 p = position;
+    if (person >= 0.0) p.xy += offsets[int(person)];
+    gl_Position = view_proj * vec4(p, 1.0);
+    v_colour = colour;
+    v_label = (person + 1.0) / 255.0;
+}
+"""
+
+FRAGMENT_SHADER = """#version 330 core
+in vec3 v_colour;
+flat in float v_label;
+out vec4 frag;
+void main() { frag = vec4(v_colour, v_label); }
+"""
+
+#: Where a hidden person is moved (far outside every frustum).
+HIDDEN = 1.0e6
+
+
+class Rasteriser:
+    """Draws ``mesh`` for up to ``n_tiles`` cameras of ``width`` x ``height`` pixels per pass.
+
+    mesh : the room and the people (:class:`render.geometry.Mesh`)
+    n_people : how many people the mesh holds (size of the offsets uniform)
+    """
+
+    def __init__(self, mesh: Mesh, n_people: int, width: int, height: int, n_tiles: int,
+                 backend: str = "egl"):
+        if n_people > 254:
+            raise ValueError(f"people.count: expected at most 254 people (uint8 labels), got {n_people}")
+        self.backend, GL = gl.context(backend)
+        self.GL = GL
+        self.width, self.height, self.n_tiles = int(width), int(height), int(n_tiles)
+        self.n_people = int(n_people)
+        self.n_vertices = len(mesh.positions)
+        self._objects = {}
+        self._build_program(GL)
+        self._build_buffers(GL, mesh)
+        self._build_framebuffer(GL)
+        self.pixels = np.empty((self.n_tiles, self.height, self.width, 4), np.uint8)
+
+    def _build_program(self, GL) -> None:
+        from OpenGL.GL import shaders
+
+        vs = shaders.compileShader(VERTEX_SHADER % {"n": max(1, self.n_people)}, GL.GL_VERTEX_SHADER)
+        fs = shaders.compileShader(FRAGMENT_SHADER, GL.GL_FRAGMENT_SHADER)
+        self.program = shaders.compileProgram(vs, fs, validate=False)
+        GL.glDeleteShader(vs)
+        GL.glDeleteShader(fs)
+        self._u_view_proj = GL.glGetUniformLocation(self.program, "view_proj")
+        self._u_offsets = GL.glGetUniformLocation(self.program, "offsets")
+
+    def _build_buffers(self, GL, mesh: Mesh) -> None:
+        data = np.ascontiguousarray(np.column_stack([mesh.positions, mesh.colours, mesh.person]),
+                                    dtype=np.float32)
+        self.vao = GL.glGenVertexArrays(1)
+        GL.glBindVertexArray(self.vao)
+        self.vbo = GL.glGenBuffers(1)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
+        GL.glBufferData(GL.GL_ARRAY_BUFFER, data.nbytes, data, GL.GL_STATIC_DRAW)
+        stride = data.shape[1] * 4
+        for loc, (start, size) in enumerate(((0, 3), (3, 3), (6, 1))):
+            GL.glEnableVertexAttribArray(loc)
+            GL.glVertexAttribPointer(loc, size, GL.GL_FLOAT, GL.GL_FALSE, stride, ctypes.c_void_p(start * 4))
+        GL.glBindVertexArray(0)
+
+    def _build_framebuffer(self, GL) -> None:
+        full_height = self.height * self.n_tiles
+        limit = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
+        if full_height > limit or self.width > limit:
+            raise ValueError(f"cameras: {self.n_tiles} cameras of {self.width}x{self.height} exceed the "
+                             f"renderbuffer limit {limit}; render fewer cameras per pass")
+        self.fbo = GL.glGenFramebuffers(1)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
+        self.canvas_tex = _texture(GL, GL.GL_RGBA8, self.width, full_height, GL.GL_RGBA,
+                                   GL.GL_UNSIGNED_BYTE, None, GL.GL_LINEAR)
+        GL.glFramebufferTexture2D(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D,
+                                  self.canvas_tex, 0)
+        self.depth_rb = GL.glGenRenderbuffers(1)
+        GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self.depth_rb)
+        GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_DEPTH_COMPONENT24, self.width, full_height)
+        GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_DEPTH_ATTACHMENT, GL.GL_RENDERBUFFER,
+                                     self.depth_rb)
+        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        if status != GL.GL_FRAMEBUFFER_COMPLETE:
+            raise RuntimeError(f"OpenGL framebuffer incomplete (status 0x{int(status):x})")
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+
+    def draw(self, view_projs: np.ndarray, offsets_xy: np.ndarray, read: bool = True) -> np.ndarray:
+        """Draw every camera's ideal canvas and (with ``read``) read the pixels back.
+
+        view_projs : (n, 4, 4) float, projection @ view per camera, n <= n_tiles
+        offsets_xy : (n_people, 2) float, metres, world frame (NaN rows: hidden)
+        Returns (n, H, W, 4) uint8, rows top first: RGB and the label in alpha. The array
+        is reused by the next call: copy what you keep.
+        """
+        GL = self.GL
+        n = len(view_projs)
+        if not 1 <= n <= self.n_tiles:
+            raise ValueError(f"view_projs: expected 1..{self.n_tiles} cameras, got {n}")
+        gl.context(self.backend)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
+        GL.glUseProgram(self.program)
+        GL.glBindVertexArray(self.vao)
+        GL.glDisable(GL.GL_BLEND)
+        GL.glDisable(GL.GL_CULL_FACE)
+        GL.glDisable(GL.GL_MULTISAMPLE)
+        GL.glDisable(GL.GL_DITHER)
+        GL.glEnable(GL.GL_DEPTH_TEST)
+        GL.glDepthFunc(GL.GL_LESS)
+        GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
+        if self.n_people:
+            off = np.asarray(offsets_xy, np.float32).reshape(self.n_people, 2).copy()
+            off[~np.isfinite(off).all(axis=1)] = HIDDEN
+            GL.glUniform2fv(self._u_offsets, self.n_people, off)
+        GL.glViewport(0, 0, self.width, self.height * n)
+        GL.glClearColor(0.0, 0.0, 0.0, 0.0)
+        GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
+        vp = np.ascontiguousarray(view_projs, np.float32)
+        for i in range(n):
+            GL.glViewport(0, i * self.height, self.width, self.height)
+            GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, vp[i])
+            GL.glDrawArrays(GL.GL_TRIANGLES, 0, self.n_vertices)
+        if not read:
+            GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+            return None
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
+        out = self.pixels[:n]
+        GL.glReadPixels(0, 0, self.width, self.height * n, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE, out)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+        return out
+
+    def close(self) -> None:
+        """Free this rasteriser's GL objects (the shared context stays)."""
+        if getattr(self, "program", None) is None:
+            return
+        GL = self.GL
+        try:
+            gl.context(self.backend)
+            GL.glDeleteFramebuffers(1, [self.fbo])
+            GL.glDeleteRenderbuffers(1, [self.depth_rb])
+            GL.glDeleteTextures([self.canvas_tex])
+            GL.glDeleteBuffers(1, [self.vbo])
+            GL.glDeleteVertexArrays(1, [self.vao])
+            GL.glDeleteProgram(self.program)
+        finally:
+            self.program = None
+
+
+def _texture(GL, internal, width, height, fmt, dtype, data, filtering):
+    tex = GL.glGenTextures(1)
+    GL.glBindTexture(GL.GL_TEXTURE_2D, tex)
+    GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+    GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, internal, width, height, 0, fmt, dtype, data)
+    for p in (GL.GL_TEXTURE_MIN_FILTER, GL.GL_TEXTURE_MAG_FILTER):
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, p, filtering)
+    for p in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T):
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, p, GL.GL_CLAMP_TO_EDGE)
+    GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
+    return tex
