@@ -103,19 +103,29 @@ class RenderDir:
     def __len__(self) -> int:
         return len(self.frame_names)
 
+    def _stack(self, what: str, paths, reader) -> np.ndarray:
+        images = []
+        for cam, path in zip(self.cameras, paths):
+            img = reader(path)
+            if img.shape[:2] != (cam.height, cam.width):
+                raise ValueError(f"{what}: {path.relative_to(self.root)} is {img.shape[1]}x{img.shape[0]}; "
+                                 f"expected {cam.width}x{cam.height} to match the calibration")
+            images.append(img)
+        return np.stack(images)
+
     def background(self) -> np.ndarray:
         """(n_cams, H, W, 3) uint8 RGB empty-room images."""
-        return np.stack([read_rgb(self.root / "background" / f"{n}.png") for n in self.names])
+        return self._stack("background", [self.root / "background" / f"{n}.png" for n in self.names], read_rgb)
 
     def frames(self, index: int) -> np.ndarray:
         """(n_cams, H, W, 3) uint8 RGB frame ``index`` (0-based) of every camera."""
         f = self.frame_names[index]
-        return np.stack([read_rgb(self.root / "frames" / n / f) for n in self.names])
+        return self._stack("frames", [self.root / "frames" / n / f for n in self.names], read_rgb)
 
     def labels(self, index: int) -> np.ndarray:
         """(n_cams, H, W) int label images of frame ``index``."""
         f = self.frame_names[index]
-        return np.stack([read_labels(self.root / "masks" / n / f) for n in self.names])
+        return self._stack("masks", [self.root / "masks" / n / f for n in self.names], read_labels)
 
 
 def iter_video_frames(source: str | os.PathLike):

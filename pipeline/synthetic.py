@@ -97,3 +97,32 @@ def degrade(frames, rng: np.random.Generator, gain: float = 0.35, noise_std: flo
     f = np.asarray(frames, np.float32) * gain
     f += rng.normal(0.0, noise_std, f.shape).astype(np.float32)
     return np.clip(np.rint(f), 0, 255).astype(np.uint8)
+
+
+def write_render_dir(root, cameras, background, frames, labels) -> None:
+    """Write a sequence in the render-directory layout of ``camtask render`` (for tests).
+
+    background : (n_cams, H, W, 3) uint8 RGB; frames : (n_frames, n_cams, H, W, 3) uint8 RGB;
+    labels : (n_frames, n_cams, H, W) int
+    """
+    from pathlib import Path
+
+    root = Path(root)
+    for sub in ("calibration", "background"):
+        (root / sub).mkdir(parents=True, exist_ok=True)
+    for i, cam in enumerate(cameras):
+        fs = cv2.FileStorage(str(root / "calibration" / f"{cam.name}.yaml"), cv2.FILE_STORAGE_WRITE)
+        fs.write("camera_matrix", cam.K)
+        fs.write("distortion_coefficients", cam.dist.reshape(1, 5))
+        fs.write("rvec", cv2.Rodrigues(cam.R)[0])
+        fs.write("tvec", cam.t.reshape(3, 1))
+        fs.write("image_width", cam.width)
+        fs.write("image_height", cam.height)
+        fs.release()
+        cv2.imwrite(str(root / "background" / f"{cam.name}.png"), cv2.cvtColor(background[i], cv2.COLOR_RGB2BGR))
+        (root / "frames" / cam.name).mkdir(parents=True, exist_ok=True)
+        (root / "masks" / cam.name).mkdir(parents=True, exist_ok=True)
+        for t in range(len(frames)):
+            cv2.imwrite(str(root / "frames" / cam.name / f"{t:06d}.png"),
+                        cv2.cvtColor(frames[t, i], cv2.COLOR_RGB2BGR))
+            cv2.imwrite(str(root / "masks" / cam.name / f"{t:06d}.png"), labels[t, i].astype(np.uint8))

@@ -1,0 +1,138 @@
+"""The scanlines and tune commands on small synthetic render directories and videos."""
+
+import argparse
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+import scene
+from pipeline import Pipeline, PipelineParams, load_params
+from pipeline.synthetic import degrade, synthetic_sequence, write_render_dir
+from testbed.commands import scanlines as scanlines_cmd
+from testbed.commands import tune as tune_cmd
+
+
+def camtask(argv):
+    """Parse and run one of our commands as ``camtask`` would (without importing the others)."""
+    parser = argparse.ArgumentParser(prog="camtask")
+    sub = parser.add_subparsers(dest="command", required=True)
+    scanlines_cmd.add_parser(sub)
+    tune_cmd.add_parser(sub)
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+def small_cameras():
+    return [scene.Camera.from_pose(i + 1, [x, 0.05, 2.2], np.radians(90 + d), np.radians(15), 160, 120,
+                                   np.radians(49), [-0.18, 0.06, 0, 0, 0])
+            for i, (x, d) in enumerate([(1.5, -20), (5.0, 20)])]
+
+
+@pytest.fixture(scope="module")
+def sequence():
+    cams = small_cameras()
+    bg, frames, labels = synthetic_sequence(cams, 10, np.random.default_rng(5))
+    return cams, bg, frames, labels
+
+
+@pytest.fixture(scope="module")
+def render_dir(tmp_path_factory, sequence):
+    root = tmp_path_factory.mktemp("render")
+    write_render_dir(root, *sequence)
+    return root
+
+
+def test_scanlines_on_render_dir(render_dir, sequence, capsys, tmp_path):
+    params = PipelineParams(column_threshold=3.0)
+    params.to_yaml(tmp_path / "p.yaml")
+    assert camtask(["scanlines", str(render_dir), "--params", str(tmp_path / "p.yaml"), "--json"]) == 0
+    m = json.loads(capsys.readouterr().out)
+    assert m["frames"] == 10 and m["cameras"] == 2
+    assert m["f1"] > 0.85 and m["pixel"]["f1"] > 0.9
+    assert len(m["per_camera"]) == 2 and {"precision", "recall", "f1", "pwc"} <= set(m["per_camera"][0])
+    with np.load(render_dir / "scanlines.npz") as z:
+        assert z["scanlines"].shape == z["gt_scanlines"].shape == (10, 2, 160)
+        assert z["scanlines"].dtype == bool
+        assert z["bearings"].shape == (2, 160)
+        cams = sequence[0]
+        np.testing.assert_allclose(z["bearings"], Pipeline(cams).bearings, atol=1e-6)
+    assert camtask(["scanlines", str(render_dir), "--frames", "2", "--out", str(tmp_path / "s.npz")]) == 0
+    text = capsys.readouterr().out
+    assert "precision" in text and "bandwidth" in text
+    assert np.load(tmp_path / "s.npz")["scanlines"].shape == (2, 2, 160)
+
+
+def test_scanlines_writes_nothing_on_error(tmp_path, render_dir, sequence):
+    broken = tmp_path / "broken"
+    cams, bg, frames, labels = sequence
+    write_render_dir(broken, cams, bg, frames[:2], labels[:2])
+    img = cv2.imread(str(broken / "frames" / "cam02" / "000001.png"))
+    cv2.imwrite(str(broken / "frames" / "cam02" / "000001.png"), img[:, :100])
+    before = sorted(p.name for p in broken.iterdir())
+    with pytest.raises(ValueError, match=r"frames: frames/cam02/000001.png is 100x120; expected 160x120 to match the calibration"):
+        camtask(["scanlines", str(broken)])
+    assert sorted(p.name for p in broken.iterdir()) == before
+    (tmp_path / "bad.yaml").write_text("opening_kernel: 4\n")
+    with pytest.raises(ValueError, match="opening_kernel: expected an odd integer"):
+        camtask(["scanlines", str(render_dir), "--params", str(tmp_path / "bad.yaml")])
+
+
+def test_scanlines_on_video(tmp_path, sequence):
+    cams, bg, frames, _ = sequence
+    path = tmp_path / "clip.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 7.5, (160, 120))
+    assert writer.isOpened()
+    for img in [bg[0]] * 3 + list(frames[:, 0]):
+        writer.write(cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
+    writer.release()
+    write_render_dir(tmp_path / "r", cams[:1], bg[:1], frames[:1, :1], np.zeros((1, 1, 120, 160), int))
+    calib = tmp_path / "r" / "calibration" / "cam01.yaml"
+    assert camtask(["scanlines", "--video", str(path), "--calibration", str(calib), "--background", "3",
+                    "--out", str(tmp_path / "v.npz"), "--json"]) == 0
+    with np.load(tmp_path / "v.npz") as z:
+        s = z["scanlines"]
+        assert s.shape == (10, 1, 160) and z["bearings"].shape == (1, 160)
+    # the same frames straight through the pipeline (no JPEG) agree on most columns
+    pipe = Pipeline(cams[:1], load_params(), np.stack([bg[:1]] * 3))
+    direct = np.stack([pipe.process(f[:1]) for f in frames])
+    assert (s == direct).mean() > 0.95 and s.any()
+    # a folder of images works the same way
+    folder = tmp_path / "imgs"
+    folder.mkdir()
+    for k, img in enumerate([bg[0]] * 2 + list(frames[:4, 0])):
+        cv2.imwrite(str(folder / f"{k:04d}.png"), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
+    assert camtask(["scanlines", "--video", str(folder), "--calibration", str(calib), "--background", "2",
+                    "--json"]) == 0
+    assert np.load(tmp_path / "imgs_scanlines.npz")["scanlines"].shape == (4, 1, 160)
+    with pytest.raises(ValueError, match=r"background: expected shape \(1, 120, 160, 3\) to match the calibration"):
+        big = tmp_path / "big"
+        big.mkdir()
+        for k in range(3):
+            cv2.imwrite(str(big / f"{k}.png"), np.full((60, 80, 3), 90, np.uint8))
+        camtask(["scanlines", "--video", str(big), "--calibration", str(calib), "--background", "1"])
+
+
+def test_tune_beats_defaults_on_dark_noisy_scene(tmp_path, sequence, capsys):
+    cams, bg, frames, labels = sequence
+    rng = np.random.default_rng(11)
+    dark = tmp_path / "dark"
+    write_render_dir(dark, cams, degrade(bg, rng, 0.3, 6.0), degrade(frames, rng, 0.3, 6.0), labels)
+    assert camtask(["scanlines", str(dark), "--json"]) == 0
+    default_f1 = json.loads(capsys.readouterr().out)["f1"]
+    out, plot = tmp_path / "best.yaml", tmp_path / "search.png"
+    assert camtask(["tune", str(dark), "--trials", "25", "--seed", "3", "--out", str(out),
+                    "--plot", str(plot), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["start_f1"] == pytest.approx(default_f1)
+    assert result["best_f1"] > default_f1 + 0.1
+    assert plot.stat().st_size > 1000
+    tuned = load_params(out)
+    assert camtask(["scanlines", str(dark), "--params", str(out), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["f1"] == pytest.approx(result["best_f1"])
+    # reproducible under --seed
+    assert camtask(["tune", str(dark), "--trials", "25", "--seed", "3", "--out", str(tmp_path / "again.yaml"),
+                    "--json"]) == 0
+    capsys.readouterr()
+    assert load_params(tmp_path / "again.yaml") == tuned

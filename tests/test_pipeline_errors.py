@@ -1,0 +1,86 @@
+"""Bad input: one-line ValueErrors naming the parameter and what was expected."""
+
+import numpy as np
+import pytest
+
+import scene
+from pipeline import Pipeline, PipelineParams, background_model, load_params
+from pipeline.params import DEFAULT_PATH
+
+
+def cam(w=32, h=24):
+    return scene.Camera.from_pose(1, [0, 0, 1.5], 0.0, 0.1, w, h, np.radians(50), [-0.1, 0, 0, 0, 0])
+
+
+BG = np.full((1, 24, 32, 3), 100, np.uint8)
+
+
+def test_default_yaml_is_the_dataclass_default():
+    assert load_params() == PipelineParams()
+    assert load_params(DEFAULT_PATH) == PipelineParams()
+
+
+def test_yaml_round_trip(tmp_path):
+    p = PipelineParams(threshold_deg=7.5, median_kernel=9)
+    p.to_yaml(tmp_path / "p.yaml", comment="tuned")
+    assert load_params(tmp_path / "p.yaml") == p
+    assert not [f for f in tmp_path.iterdir() if f.name.startswith(".")]
+
+
+@pytest.mark.parametrize("changes, match", [
+    ({"colour": 3}, r"unknown key 'colour'"),
+    ({"opening_kernel": 4}, r"opening_kernel: expected an odd integer >= 1, got 4"),
+    ({"median_kernel": -3}, r"median_kernel: expected an odd integer >= 1, got -3"),
+    ({"spatial_kernel": 2.0}, r"spatial_kernel: expected an odd integer"),
+    ({"threshold_deg": -1}, r"threshold_deg: expected a .*number"),
+    ({"threshold_deg": 90}, r"threshold_deg: expected a number in \(0, 90\)"),
+    ({"temporal_alpha": 0}, r"temporal_alpha: expected a number in \(0, 1\]"),
+    ({"column_threshold": 0}, r"column_threshold: expected a finite number > 0"),
+    ({"brightness_floor": "dark"}, r"brightness_floor: expected a number"),
+])
+def test_bad_parameters(changes, match):
+    with pytest.raises(ValueError, match=match):
+        PipelineParams.from_mapping(changes)
+
+
+def test_bad_yaml_file(tmp_path):
+    (tmp_path / "p.yaml").write_text("threshold_deg: 5\nkernel: 3\n")
+    with pytest.raises(ValueError, match="unknown key 'kernel'"):
+        load_params(tmp_path / "p.yaml")
+    (tmp_path / "q.yaml").write_text("[1, 2]\n")
+    with pytest.raises(ValueError, match="expected a mapping"):
+        load_params(tmp_path / "q.yaml")
+
+
+@pytest.mark.parametrize("frames, match", [
+    (np.zeros((1, 24, 31, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\) to match the calibration"),
+    (np.zeros((2, 24, 32, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\)"),
+    (np.zeros((1, 24, 32, 3), np.float32), r"frames: expected dtype uint8"),
+    (np.zeros((1, 24, 32), np.uint8), r"frames: expected shape \(n_cams, H, W, 3\)"),
+    (np.zeros((1, 0, 32, 3), np.uint8), r"frames: expected non-empty images"),
+])
+def test_bad_frames(frames, match):
+    pipe = Pipeline([cam()], background=BG)
+    with pytest.raises(ValueError, match=match):
+        pipe.process(frames)
+
+
+def test_bad_background():
+    with pytest.raises(ValueError, match=r"background: expected shape \(1, 24, 32, 3\) to match"):
+        Pipeline([cam()], background=np.full((1, 24, 30, 3), 9, np.uint8))
+    with pytest.raises(ValueError, match="background: camera index 0 is all black"):
+        Pipeline([cam()], background=np.zeros((1, 24, 32, 3), np.uint8))
+    with pytest.raises(ValueError, match="background: expected uint8 frames"):
+        background_model(np.zeros((1, 0, 32, 3), np.uint8))
+    with pytest.raises(ValueError, match="background: not set"):
+        Pipeline([cam()]).process(BG)
+
+
+def test_bad_labels_and_cameras():
+    pipe = Pipeline([cam()], background=BG)
+    with pytest.raises(ValueError, match=r"labels: expected shape \(1, 24, 32\)"):
+        pipe.ground_truth(np.zeros((1, 24, 33), int))
+    with pytest.raises(ValueError, match="cameras: expected at least one"):
+        Pipeline([])
+    with pytest.raises(ValueError, match="cameras: expected every camera to have the same resolution"):
+        Pipeline([cam(), cam(40, 30)])

@@ -1,0 +1,213 @@
+"""Hand-computable cases, round trips and equivalences of the pipeline steps."""
+
+import cv2
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+from scipy import ndimage
+
+import scene
+from pipeline import (Pipeline, PipelineParams, background_model, cdnet_metrics, colour_angle_foreground,
+                      confusion, median_threshold, open_masks, rle_bits, rle_decode, rle_encode,
+                      scanline_bits, spatial_smooth)
+from pipeline.reference import ReferencePipeline
+from pipeline.synthetic import synthetic_sequence
+
+LAB = scene.load_scene("lab").cameras
+
+
+def flat_camera(width=64, height=48):
+    return scene.Camera.from_pose(1, [0, 0, 1.5], 0.0, 0.0, width, height, np.radians(50), [0] * 5)
+
+
+# --- foreground -----------------------------------------------------------------------
+
+def test_square_of_colour_is_foreground():
+    bg = np.full((1, 6, 8, 3), 100, np.uint8)
+    fr = bg.copy()
+    fr[0, 2:4, 3:6] = (100, 140, 60)
+    fg = colour_angle_foreground(fr, background_model(bg), 5.0, 10.0, 20.0)
+    expected = np.zeros((6, 8), bool)
+    expected[2:4, 3:6] = True
+    np.testing.assert_array_equal(fg[0], expected)
+
+
+def test_angle_threshold_is_the_angle():
+    b = np.array([200.0, 100.0, 50.0])
+    # rotate b by 4 and by 6 degrees in the plane of b and a perpendicular vector
+    perp = np.cross(b, [0.0, 0.0, 1.0]); perp /= np.linalg.norm(perp)
+    u = b / np.linalg.norm(b)
+    vecs = [np.linalg.norm(b) * (np.cos(np.radians(d)) * u + np.sin(np.radians(d)) * perp) for d in (4, 6)]
+    fr = np.clip(np.rint(np.array(vecs)), 0, 255).astype(np.uint8).reshape(1, 1, 2, 3)
+    bg = np.broadcast_to(b.astype(np.uint8), (1, 1, 2, 3)).copy()
+    fg = colour_angle_foreground(fr, background_model(bg), 5.0, 0.0, 0.0)
+    assert fg[0, 0].tolist() == [False, True]
+
+
+def test_brightness_scaling_is_not_foreground_but_dark_floor_uses_difference():
+    bg = np.full((1, 1, 3, 3), 150, np.uint8)
+    fr = np.array([[[[75, 75, 75], [5, 5, 5], [4, 0, 0]]]], np.uint8)   # shadow, black, dark red
+    fg = colour_angle_foreground(fr, background_model(bg), 5.0, 20.0, 30.0)
+    # half brightness keeps the angle: background; near black is below the floor and
+    # far from the background: foreground (the dark person in front of a lit wall)
+    assert fg[0, 0].tolist() == [False, True, True]
+    dark_bg = np.full((1, 1, 2, 3), 6, np.uint8)
+    fr = np.array([[[[2, 9, 4], [90, 10, 10]]]], np.uint8)   # dark noise; lit red object
+    fg = colour_angle_foreground(fr, background_model(dark_bg), 5.0, 20.0, 30.0)
+    assert fg[0, 0].tolist() == [False, True]
+
+
+def test_opening_removes_specks_keeps_blocks_and_edges():
+    m = np.zeros((2, 10, 10), bool)
+    m[0, 2:6, 2:6] = True
+    m[0, 8, 8] = True
+    m[1, 7:, :4] = True            # touches the border: kept whole
+    out = open_masks(m, 3)
+    assert out[0, 8, 8] == False  # noqa: E712
+    np.testing.assert_array_equal(out[0, 2:6, 2:6], True)
+    np.testing.assert_array_equal(out[1], m[1])
+    ref = np.stack([ndimage.binary_opening(x, np.ones((3, 3)), border_value=0) for x in m])
+    np.testing.assert_array_equal(out, ref)
+
+
+# --- rectification and the bearing map -------------------------------------------------
+
+def test_square_gives_its_columns_without_distortion():
+    cam = flat_camera()
+    bg = np.full((1, 48, 64, 3), 120, np.uint8)
+    p = PipelineParams(opening_kernel=3, spatial_kernel=1, median_kernel=1, column_threshold=0.5)
+    pipe = Pipeline([cam], p, background=bg)
+    fr = bg.copy()
+    fr[0, 10:30, 20:28] = (40, 200, 40)
+    assert np.flatnonzero(pipe.process(fr)[0]).tolist() == list(range(20, 28))
+
+
+@pytest.mark.parametrize("index", [0, 4, 9, 15])
+def test_bearing_of_projected_world_point(index):
+    cam = LAB[index]
+    pipe = Pipeline([cam])
+    rng = np.random.default_rng(index)
+    checked = 0
+    for _ in range(40):
+        p_world = np.array([rng.uniform(0.3, 6.4), rng.uniform(0.3, 5.5), rng.uniform(0.0, 2.0)])
+        uv, _ = cv2.projectPoints(p_world[None], cv2.Rodrigues(cam.R)[0], cam.t, cam.K, cam.dist)
+        u, v = uv.ravel()
+        if (cam.R @ p_world + cam.t)[2] <= 0 or not (3 <= u < cam.width - 3 and 3 <= v < cam.height - 3):
+            continue
+        mask = np.zeros((1, cam.height, cam.width), bool)
+        r, c = int(round(v)), int(round(u))
+        mask[0, r - 2:r + 3, c - 2:c + 3] = True
+        cols = np.flatnonzero(pipe.rectifier.rectify(mask)[0].any(axis=0))
+        assert cols.size
+        col = cols.mean()
+        d = p_world[:2] - cam.center_world[:2]
+        expected = np.arctan2(d[1], d[0])
+        got = np.interp(col, np.arange(cam.width), np.unwrap(pipe.bearings[0]))
+        err = np.angle(np.exp(1j * (got - expected)))
+        step = abs(pipe.bearings[0, 1] - pipe.bearings[0, 0])
+        assert abs(err) <= 1.0 * step + 1e-9   # within a column
+        checked += 1
+    assert checked >= 5
+
+
+def test_bearings_cover_the_field_of_view():
+    pipe = Pipeline(LAB[:2])
+    b = np.unwrap(pipe.bearings, axis=1)
+    assert np.all(np.diff(b, axis=1) < 0)         # left to right turns clockwise
+    span = b[:, 0] - b[:, -1]
+    assert np.all(span >= LAB[0].hfov)            # the virtual camera covers the real one
+    mid = b[:, LAB[0].width // 2]
+    np.testing.assert_allclose(np.angle(np.exp(1j * (mid - [c.yaw for c in LAB[:2]]))), 0, atol=0.01)
+
+
+# --- scanline filters ------------------------------------------------------------------
+
+@settings(max_examples=60, deadline=None)
+@given(hnp.arrays(np.int64, st.tuples(st.integers(1, 3), st.integers(1, 40)), elements=st.integers(0, 50)),
+       st.sampled_from([1, 3, 5, 7]), st.floats(0.0, 40.0))
+def test_median_threshold_equals_scipy_median(x, k, t):
+    x = x.astype(float)
+    ref = np.stack([ndimage.median_filter(r, size=k, mode="constant", cval=0.0) for r in x]) > t
+    np.testing.assert_array_equal(median_threshold(x, k, t), ref)
+
+
+@settings(max_examples=40, deadline=None)
+@given(hnp.arrays(np.int64, st.tuples(st.integers(1, 3), st.integers(9, 40)), elements=st.integers(0, 500)),
+       st.sampled_from([1, 3, 5, 9]))
+def test_spatial_smooth_equals_convolution(x, k):
+    ref = np.stack([np.convolve(r.astype(float), np.ones(k), mode="same") / k for r in x])
+    np.testing.assert_array_equal(spatial_smooth(x, k), ref)
+
+
+# --- run-length coding -----------------------------------------------------------------
+
+@settings(max_examples=200, deadline=None)
+@given(hnp.arrays(bool, st.integers(1, 700)))
+def test_rle_round_trip(s):
+    runs = rle_encode(s)
+    np.testing.assert_array_equal(rle_decode(runs, s.size), s)
+    assert runs.sum() == s.size and np.all(runs[1:] > 0)
+    assert scanline_bits(s[None])[0] == rle_bits(runs, s.size)
+
+
+def test_rle_bits_of_640_columns():
+    s = np.zeros(640, bool)
+    assert rle_bits(rle_encode(s), 640) == 10
+    s[100:150] = True
+    s[300:310] = True
+    assert rle_encode(s).tolist() == [100, 50, 150, 10, 330]
+    assert scanline_bits(s) == 50
+
+
+# --- metrics ---------------------------------------------------------------------------
+
+def test_metrics_on_known_confusion():
+    pred = np.array([1, 1, 1, 0, 0, 0, 0, 1, 0, 0], bool)
+    true = np.array([1, 1, 0, 1, 0, 0, 0, 0, 0, 0], bool)
+    c = confusion(pred, true)
+    assert (c["tp"], c["fp"], c["fn"], c["tn"]) == (2, 2, 1, 5)
+    m = cdnet_metrics(**c)
+    assert m["recall"] == pytest.approx(2 / 3)
+    assert m["precision"] == pytest.approx(0.5)
+    assert m["f1"] == pytest.approx(2 * 0.5 * (2 / 3) / (0.5 + 2 / 3))
+    assert m["pwc"] == pytest.approx(30.0)
+    assert m["specificity"] == pytest.approx(5 / 7)
+
+
+def test_metrics_empty_cases():
+    m = cdnet_metrics(0, 0, 0, 10)
+    assert (m["recall"], m["precision"], m["pwc"]) == (1.0, 1.0, 0.0)
+    assert cdnet_metrics(0, 5, 0, 5)["f1"] == 0.0
+
+
+# --- production equals the straightforward reference -----------------------------------
+
+def test_production_matches_reference_on_lab_frames():
+    cams = LAB[:3]
+    rng = np.random.default_rng(3)
+    bg, frames, labels = synthetic_sequence(cams, 3, rng)
+    bg[:, 380:, :150] //= 10                       # a dark corner exercises the brightness floor
+    frames[:, :, 380:, :150] //= 10
+    params = PipelineParams(temporal_alpha=0.6)
+    model = background_model(bg)
+    fast, ref = Pipeline(cams, params, model), ReferencePipeline(cams, params, model)
+    for f in frames:
+        np.testing.assert_array_equal(fast.process(f), ref.process(f))
+
+
+def test_temporal_state_and_reset():
+    cam = flat_camera()
+    bg = np.full((1, 48, 64, 3), 120, np.uint8)
+    p = PipelineParams(opening_kernel=1, spatial_kernel=1, median_kernel=1, temporal_alpha=0.5,
+                       column_threshold=12.0)
+    pipe = Pipeline([cam], p, background=bg)
+    fr = bg.copy()
+    fr[0, :, 30:32] = (200, 40, 40)                # 48 rows of foreground in 2 columns
+    assert pipe.process(fr)[0, 30:32].all()
+    assert pipe.process(bg)[0, 30:32].all()        # 24 left after one empty frame
+    assert not pipe.process(bg)[0].any()           # 12: not above the threshold
+    pipe.process(fr)
+    pipe.reset()
+    assert not pipe.process(bg)[0].any()
