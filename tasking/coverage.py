@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
-from shapely.geometry import Polygon
+from shapely.geometry import Polygon, box
 
 __all__ = ["Coverage", "coverage_cells", "subset_areas", "optimal_subset"]
 
@@ -61,12 +61,18 @@ def coverage_cells(wedges, room: Polygon) -> Coverage:
     Coverage with one row per distinct coverage pattern.
     """
     wedges = np.asarray(wedges, dtype=object)
-    edges = shapely.intersection(shapely.boundary(wedges), room)
+    # Clip edges to a box around the room rather than to the room itself: an edge
+    # clipped at the wall ends a rounding error away from the wall's ring, is not noded
+    # onto it and would be dropped by polygonize as a dangle. Faces between the box and
+    # the wall are discarded below.
+    x0, y0, x1, y1 = room.bounds
+    pad = 0.01 * np.hypot(x1 - x0, y1 - y0)
+    edges = shapely.intersection(shapely.boundary(wedges), box(x0 - pad, y0 - pad, x1 + pad, y1 + pad))
     rings = shapely.get_parts(shapely.boundary(room))
     noded = shapely.union_all(np.concatenate([edges, rings]))
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
     pts = shapely.point_on_surface(faces)
-    inside = shapely.contains(room, pts)  # drops faces inside holes of the room
+    inside = shapely.contains(room, pts)  # drops faces outside the walls or in holes
     faces, pts = faces[inside], pts[inside]
     masks = np.empty((faces.size, wedges.size), dtype=bool)
     for c, w in enumerate(wedges):

@@ -1,0 +1,261 @@
+"""Taskers: hand cases, agreement between greedy variants, optimality, errors."""
+
+from itertools import combinations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from shapely.geometry import box
+from test_tasking_common import circle_room, random_discs, ring_cameras
+
+from tasking import (
+    TASKERS,
+    IncrementalTasker,
+    choose_cameras,
+    free_wedges_from_discs,
+    greedy_select,
+    hull_from_wedges,
+    lazy_greedy_select,
+    naive_greedy_select,
+    visual_hull_of_discs,
+)
+from tasking.clustering import axial_distance, cluster_axes, pair_axes
+from tasking.coverage import coverage_cells, subset_areas
+
+R = 0.1
+ROOM = circle_room(quad_segs=32)
+
+
+def area_of(sel, xy, yaw, centres, fov=np.pi):
+    return visual_hull_of_discs(xy[sel], yaw[sel], fov, centres, R, ROOM).area
+
+
+def drop(seed, n=10, m=4):
+    rng = np.random.default_rng(seed)
+    xy, yaw = ring_cameras(n)
+    return xy, yaw, random_discs(rng, m)
+
+
+# --- hand cases -----------------------------------------------------------------------
+
+
+def test_uniform_spreads_indices_and_uses_supplied_sets():
+    xy, yaw = ring_cameras(16)
+    c = [[0.2, 0.0]]
+    assert choose_cameras("uniform", 4, xy, yaw, np.pi, c, R, ROOM).tolist() == [0, 4, 8, 12]
+    assert choose_cameras("uniform", 5, xy, yaw, np.pi, c, R, ROOM).tolist() == [0, 3, 6, 10, 13]
+    odd = {8: list(range(0, 16, 2))}  # paper: the odd cameras 1, 3, ..., 15 (1-based)
+    got = choose_cameras("uniform", 8, xy, yaw, np.pi, c, R, ROOM, uniform_sets=odd)
+    assert got.tolist() == odd[8]
+    # no entry for k: fall back to the even spread
+    assert choose_cameras("uniform", 2, xy, yaw, np.pi, c, R, ROOM, uniform_sets=odd).tolist() == [0, 8]
+
+
+def test_two_objects_two_cameras_pick_parallel_and_perpendicular():
+    # Figure 7: objects on the x axis; cameras every 45 degrees. The best pair looks
+    # along the pair vector and across it, leaving no phantom.
+    xy, yaw = ring_cameras(8)
+    c = np.array([[-0.3, 0.0], [0.3, 0.0]])
+    for tasker in ("greedy", "lazy_greedy", "optimal"):
+        sel = choose_cameras(tasker, 2, xy, yaw, np.pi, c, R, ROOM)
+        axes = np.degrees(yaw[sel] % np.pi).round(6)
+        assert sorted(axes.tolist()) == [0.0, 90.0], tasker
+    sel = choose_cameras("clustering", 2, xy, yaw, np.pi, c, R, ROOM)
+    assert sorted(np.degrees(yaw[sel] % np.pi).round(6).tolist()) == [0.0, 90.0]
+
+
+def test_clustering_handles_the_wrap_at_pi():
+    # axes near 0 and near pi are the same direction: one cluster, not two
+    axes = np.array([0.01, np.pi - 0.01, 0.02, np.pi - 0.02, np.pi / 2, np.pi / 2 + 0.01])
+    centres, sizes = cluster_axes(axes, 2, seed=0)
+    assert sizes.tolist() == [4, 2]
+    assert axial_distance(centres[0], 0.0) < 0.02
+    assert axial_distance(centres[1], np.pi / 2) < 0.02
+    assert pair_axes(np.array([[0.0, 0.0], [0.0, 0.0]])).size == 0
+
+
+def test_clustering_falls_back_to_uniform_with_fewer_than_two_estimates():
+    xy, yaw = ring_cameras(12)
+    uni = choose_cameras("uniform", 4, xy, yaw, np.pi, [[0.1, 0.1]], R, ROOM)
+    got = choose_cameras("clustering", 4, xy, yaw, np.pi, [[0.1, 0.1]], R, ROOM)
+    assert got.tolist() == uni.tolist()
+    got = choose_cameras("clustering", 4, xy, yaw, np.pi, np.empty((0, 2)), R, ROOM)
+    assert got.tolist() == uni.tolist()
+
+
+def test_clustering_is_seeded_and_distinct():
+    xy, yaw, c = drop(5, n=16, m=5)
+    a = choose_cameras("clustering", 6, xy, yaw, np.pi, c, R, ROOM, rng=np.random.default_rng(1))
+    b = choose_cameras("clustering", 6, xy, yaw, np.pi, c, R, ROOM, rng=np.random.default_rng(1))
+    assert a.tolist() == b.tolist() and np.unique(a).size == 6
+
+
+def _wall_rig():
+    """Square room, 180-degree cameras on the walls (wedge edges run along the walls)."""
+    room = box(-1, -1, 1, 1)
+    xy = np.array([[0, -1], [1, 0], [0, 1], [-1, 0], [-0.5, -1], [1, 0.5], [0.5, 1], [-1, -0.5]])
+    yaw = np.array([0.5, 1, 1.5, 0, 0.5, 1, 1.5, 0]) * np.pi
+    return room, xy.astype(float), yaw
+
+
+@pytest.mark.parametrize("rig", ["circle", "walls"])
+def test_coverage_table_matches_geometry(rig):
+    if rig == "circle":
+        room, (xy, yaw, c) = ROOM, drop(2, n=8, m=3)
+    else:
+        room, xy, yaw = _wall_rig()
+        c = np.array([[0.2, 0.3], [-0.4, -0.1], [0.5, -0.5]])
+    w = free_wedges_from_discs(xy, yaw, np.pi, c, R, room)
+    cov = coverage_cells(w, room)
+    subsets = np.array(list(combinations(range(8), 3)))
+    table = subset_areas(cov, subsets)
+    direct = [hull_from_wedges(w, room, s).area for s in subsets]
+    np.testing.assert_allclose(table, direct, rtol=1e-9, atol=1e-12)
+
+
+def test_optimal_matches_brute_force_over_hulls():
+    xy, yaw, c = drop(4, n=9, m=4)
+    w = free_wedges_from_discs(xy, yaw, np.pi, c, R, ROOM)
+    areas = {s: hull_from_wedges(w, ROOM, list(s)).area for s in combinations(range(9), 3)}
+    got = choose_cameras("optimal", 3, xy, yaw, np.pi, c, R, ROOM)
+    assert areas[tuple(got)] == pytest.approx(min(areas.values()), rel=1e-9)
+
+
+def test_naive_greedy_agrees_with_production_greedy():
+    xy, yaw, c = drop(7, n=12, m=5)
+    w = free_wedges_from_discs(xy, yaw, np.pi, c, R, ROOM)
+    naive = naive_greedy_select(w, ROOM, 5)
+    fast, hull = greedy_select(w, ROOM, 5)
+    assert hull_from_wedges(w, ROOM, naive).area == pytest.approx(hull.area, rel=1e-9)
+    assert sorted(naive) == sorted(fast)
+
+
+def test_incremental_swaps_m_cameras_and_keeps_k():
+    xy, yaw, c = drop(8, n=16, m=5)
+    current = np.arange(8)
+    new = choose_cameras("incremental", 8, xy, yaw, np.pi, c, R, ROOM, current=current, m=2)
+    assert new.size == 8 and np.unique(new).size == 8
+    assert np.setdiff1d(current, new).size <= 2
+    assert area_of(new, xy, yaw, c) <= area_of(current, xy, yaw, c) + 1e-12
+    # without a current set it is greedy
+    g = choose_cameras("greedy", 8, xy, yaw, np.pi, c, R, ROOM)
+    assert choose_cameras("incremental", 8, xy, yaw, np.pi, c, R, ROOM).tolist() == g.tolist()
+
+
+def test_incremental_tasker_schedule():
+    xy, yaw, c = drop(9, n=12, m=4)
+    tasker = IncrementalTasker(k=4, m=1, update_every=3)
+    first = tasker.step(0, xy, yaw, np.pi, c, R, ROOM)
+    assert first.tolist() == choose_cameras("greedy", 4, xy, yaw, np.pi, c, R, ROOM).tolist()
+    moved = c + 0.05
+    kept = tasker.step(1, xy, yaw, np.pi, moved, R, ROOM)
+    assert kept.tolist() == first.tolist()  # not an update frame
+    upd = tasker.step(3, xy, yaw, np.pi, moved, R, ROOM)
+    expect = choose_cameras("incremental", 4, xy, yaw, np.pi, moved, R, ROOM, current=first)
+    assert upd.tolist() == expect.tolist()
+
+
+def test_estimates_may_overlap_and_cover_a_camera():
+    # estimates are polygon centres, not real objects: overlap is fine, and a camera
+    # inside an estimated disc is simply blind
+    xy, yaw = ring_cameras(8)
+    est = np.array([[0.0, 0.0], [0.05, 0.0], [0.95, 0.0]])
+    for tasker in TASKERS:
+        sel = choose_cameras(tasker, 3, xy, yaw, np.pi, est, R, ROOM, current=[0, 1, 2])
+        assert sel.size == 3
+
+
+def test_lab_room_with_narrow_fov():
+    room = box(0, 0, 6.7056, 5.7912)
+    xs = np.linspace(0.5, 6.2, 4)
+    xy = np.r_[np.c_[xs, np.zeros(4)], np.c_[xs, np.full(4, 5.7912)]]
+    yaw = np.r_[np.full(4, np.pi / 2), np.full(4, -np.pi / 2)]
+    est = np.array([[2.0, 2.0], [4.5, 3.5], [3.0, 4.0]])
+    fov = np.radians(49)
+    g = choose_cameras("greedy", 4, xy, yaw, fov, est, 0.25, room)
+    lz = choose_cameras("lazy_greedy", 4, xy, yaw, fov, est, 0.25, room)
+    opt = choose_cameras("optimal", 4, xy, yaw, fov, est, 0.25, room)
+    assert g.tolist() == lz.tolist()
+    w = free_wedges_from_discs(xy, yaw, fov, est, 0.25, room, strict=False)
+    assert hull_from_wedges(w, room, opt).area <= hull_from_wedges(w, room, g).area + 1e-9
+
+
+# --- properties -----------------------------------------------------------------------
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(6, 11), st.integers(1, 5), st.integers(1, 4))
+def test_optimal_never_worse_than_greedy_and_lazy_equals_greedy(seed, n, m, k):
+    rng = np.random.default_rng(seed)
+    xy, yaw = ring_cameras(n, phase=rng.uniform(0, 2 * np.pi))
+    c = random_discs(rng, m)
+    fov = rng.choice([np.pi, np.radians(49), np.radians(120)])
+    w = free_wedges_from_discs(xy, yaw, fov, c, R, ROOM)
+    g, hg = greedy_select(w, ROOM, k)
+    lz, hl = lazy_greedy_select(w, ROOM, k)
+    assert g == lz  # same cameras in the same order
+    opt = choose_cameras("optimal", k, xy, yaw, fov, c, R, ROOM)
+    assert hull_from_wedges(w, ROOM, opt).area <= hull_from_wedges(w, ROOM, g).area + 1e-9
+
+
+def test_greedy_beats_uniform_on_average():
+    # not per instance: over seeded random drops of 5 objects, 16 cameras, k = 4 and 6
+    diffs = []
+    for seed in range(12):
+        xy, yaw, c = drop(100 + seed, n=16, m=5)
+        for k in (4, 6):
+            g = choose_cameras("greedy", k, xy, yaw, np.pi, c, R, ROOM)
+            u = choose_cameras("uniform", k, xy, yaw, np.pi, c, R, ROOM)
+            diffs.append(area_of(u, xy, yaw, c) - area_of(g, xy, yaw, c))
+    assert np.mean(diffs) > 0
+
+
+# --- errors ---------------------------------------------------------------------------
+
+XY, YAW = ring_cameras(6)
+EST = np.array([[0.2, 0.0], [-0.3, 0.1]])
+
+
+@pytest.mark.parametrize(
+    "tasker, k, kwargs, match",
+    [
+        ("best", 2, {}, "tasker must be one of 'uniform', 'clustering', 'optimal'"),
+        ("greedy", 7, {}, "k must be >= 1 and <= 6"),
+        ("greedy", 0, {}, "k must be >= 1"),
+        ("incremental", 2, {"m": 3}, "m must be >= 1 and <= 2"),
+        ("incremental", 2, {"m": 0}, "m must be >= 1"),
+        ("incremental", 2, {"current": [0, 1, 2]}, "current must hold 2 indices"),
+        ("incremental", 2, {"current": [0, 9]}, "current must be 0-based indices"),
+        ("optimal", 3, {"max_subsets": 10}, r"max_subsets: optimal needs C\(6, 3\) = 20"),
+        ("uniform", 2, {"uniform_sets": {2: [0, 0]}}, r"uniform_sets\[2\] must not repeat"),
+        ("clustering", 2, {"rng": 3}, "rng must be a numpy Generator"),
+    ],
+)
+def test_choose_errors(tasker, k, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        choose_cameras(tasker, k, XY, YAW, np.pi, EST, R, ROOM, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (dict(camera_xy=np.empty((0, 2))), "camera_xy must not be empty"),
+        (dict(estimates=[[np.nan, 0.0]]), "estimates must be finite"),
+        (dict(fov=0.0), "fov must be in"),
+        (dict(camera_yaw=YAW[:3]), r"camera_yaw must have shape \(6,\)"),
+        (dict(radius=-0.1), "radius must be finite and > 0"),
+    ],
+)
+def test_choose_input_errors(args, match):
+    base = dict(camera_xy=XY, camera_yaw=YAW, fov=np.pi, estimates=EST, radius=R, room=ROOM)
+    base.update(args)
+    with pytest.raises(ValueError, match=match):
+        choose_cameras("greedy", 2, **base)
+
+
+def test_incremental_tasker_errors():
+    with pytest.raises(ValueError, match="update_every must be >= 1"):
+        IncrementalTasker(3, 1, 0)
+    with pytest.raises(ValueError, match="m must be >= 1 and <= 3"):
+        IncrementalTasker(3, 4)
