@@ -1,0 +1,27 @@
+"""Shared fixtures: the lab scene and one renderer per test session (one GL context per process)."""
+
+import numpy as np
+import pytest
+
+from scene import load_scene
+
+
+@pytest.fixture(scope="session")
+def lab():
+    """The built-in lab scene (16 calibrated cameras, 3 people)."""
+    return load_scene("lab")
+
+
+@pytest.fixture(scope="session")
+def lab_renderer(lab):
+    """A :class:`render.Renderer` of the lab, all cameras, reused by every rendering test."""
+    from render import Renderer
+
+    with Renderer(lab) as r:
+        yield r
+
+
+@pytest.fixture
+def three_people():
+    """Three people standing apart in the lab, (3, 2) metres, world frame."""
+    return np.array([[2.0, 2.0], [4.5, 3.0], [3.0, 4.3]])
