@@ -1,10 +1,11 @@
 """What the cameras see: shaded RGB frames, exact label images, lens distortion, noise.
 
->>> # doctest: +SKIP
->>> with Renderer(load_scene("lab")) as r:
-...     frames = r.render(np.array([[2.0, 2.0], [4.0, 3.0], [3.0, 4.5]]), rng=np.random.default_rng(0))
-...     frames.rgb.shape, frames.labels.shape
-((16, 480, 640, 3), (16, 480, 640))
+Usage (not run as a doctest: it needs OpenGL)::
+
+    with Renderer(load_scene("lab")) as r:
+        frames = r.render(np.array([[2.0, 2.0], [4.0, 3.0], [3.0, 4.5]]),
+                          rng=np.random.default_rng(0))
+        frames.rgb.shape, frames.labels.shape   # (16, 480, 640, 3), (16, 480, 640)
 """
 
 from __future__ import annotations
