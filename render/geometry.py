@@ -52,7 +52,7 @@ class Mesh:
     person: np.ndarray
 
     @staticmethod
-    def concatenate(meshes) -> "Mesh":
+    def concatenate(meshes) -> Mesh:
         meshes = list(meshes)
         return Mesh(*(np.concatenate([getattr(m, f) for m in meshes]).astype(np.float32)
                       for f in ("positions", "colours", "person")))

@@ -82,7 +82,7 @@ def _imported_platform() -> str | None:
 
 
 def _failure(tried: list[tuple[str, str]]) -> BackendError:
-    lines = [f"no usable OpenGL backend for off-screen rendering:"]
+    lines = ["no usable OpenGL backend for off-screen rendering:"]
     for backend, why in tried:
         lines.append(f"  {backend}: {why}; install it with: {APT_LINES[backend]}")
     return BackendError("\n".join(lines))

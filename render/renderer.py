@@ -103,7 +103,7 @@ class Renderer:
         self._background = None
 
     # -- context manager -------------------------------------------------------------
-    def __enter__(self) -> "Renderer":
+    def __enter__(self) -> Renderer:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -108,7 +108,7 @@ class DatasetWriter:
             write_calibration(self.tmp / "calibration" / f"{c.name}.yaml", c)
         self._people = []
 
-    def __enter__(self) -> "DatasetWriter":
+    def __enter__(self) -> DatasetWriter:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:

@@ -1,7 +1,6 @@
 """camtask render: the layout on disk, calibration round trip, refusal, backend error."""
 
 import json
-from pathlib import Path
 
 import cv2
 import numpy as np
