@@ -66,7 +66,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
     if scheduler is not None:
         address = scheduler if "://" in scheduler else f"tcp://{scheduler}"
         try:
-            client = Client(address, timeout=f"{connect_timeout}s", set_as_default=False)
+            client = Client(address, timeout=f"{connect_timeout}s")
         except (OSError, TimeoutError, ValueError) as exc:
             msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({msg})") from None
@@ -80,7 +80,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
         n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
         silence_logs=logging.ERROR,
     )
-    client = Client(cluster, set_as_default=False)
+    client = Client(cluster)
     try:
         yield client
     finally:

@@ -18,16 +18,10 @@ import numpy as np
 from shapely.geometry import Polygon
 
 from scene.motion import circle_polygon
-from tasking import polygon_centres, prune_small, visual_hull_of_discs
+from tasking import TASKERS, choose_cameras, polygon_centres, prune_small, visual_hull_of_discs
 
-try:  # the taskers land in tasking/ after the hull; until then use the stand-in
-    from tasking import TASKERS, choose_cameras
-
-    TASKING_BACKEND = "tasking"
-except ImportError:  # pragma: no cover - depends on the state of tasking/
-    from ._standin import TASKERS, choose_cameras
-
-    TASKING_BACKEND = "standin"
+#: Where the taskers come from (recorded in every study's metadata).
+TASKING_BACKEND = "tasking"
 
 __all__ = [
     "FOV", "TASKING_BACKEND", "TASKERS", "choose_cameras", "circle_cameras", "circle_room",

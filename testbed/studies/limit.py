@@ -65,8 +65,8 @@ def covered(points: np.ndarray, centers: np.ndarray, radii: np.ndarray) -> np.nd
     returns (P,) bool
 
     >>> covered(np.array([[0.0, 0.0], [0.0, 0.5]]),
-    ...         np.array([[0.15, 0.0], [-0.15, 0.0], [0.0, 0.15], [0.0, -0.15]]),
-    ...         np.full(4, 0.1)).tolist()
+    ...         0.15 * np.array([[1.0, 0.0], [-0.5, 0.75**0.5], [-0.5, -0.75**0.5]]),
+    ...         np.full(3, 0.1)).tolist()
     [True, False]
     """
     d = centers[None, :, :] - points[:, None, :]  # (P, m, 2)

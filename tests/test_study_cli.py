@@ -1,0 +1,118 @@
+"""`camtask study ...` end to end on tiny runs: tables, JSON schema, plots, errors, Dask."""
+
+import json
+
+import pytest
+
+import testbed.cli as cli
+
+
+@pytest.fixture(autouse=True)
+def only_study_command(monkeypatch):
+    # Other command modules are developed in parallel; test this one on its own.
+    monkeypatch.setattr(cli, "COMMANDS", ("testbed.commands.study",))
+
+
+def run_json(capsys, *argv):
+    code = cli.main(["study", *argv, "--json", "--no-progress"])
+    out = capsys.readouterr().out
+    assert code == 0
+    return json.loads(out)
+
+
+CAMERAS = ("cameras", "--objects", "1,3", "--cameras", "2,4,8,9", "--trials", "3", "--seed", "5")
+STATIC = ("static", "--objects", "3", "--k", "2,3", "--candidates", "8", "--trials", "2",
+          "--taskers", "uniform,clustering,optimal,greedy")
+MOVING = ("moving", "--objects", "3", "--k", "2,3", "--candidates", "8", "--trials", "2",
+          "--steps", "4", "--update-every", "1,2")
+
+
+def test_cameras_json_schema_and_plot(capsys, tmp_path):
+    png = tmp_path / "cameras.png"
+    doc = run_json(capsys, *CAMERAS, "--workers", "0", "--plot", str(png))
+    assert png.stat().st_size > 1000
+    assert doc["meta"]["seed"] == 5 and doc["meta"]["trials"] == 3
+    assert doc["meta"]["arguments"]["objects"] == [1, 3]
+    recs = doc["records"]
+    assert len(recs) == 2 * (4 + 1)
+    for r in recs:
+        assert {"objects", "cameras", "residual", "residual_raw", "trials", "limit"} <= set(r)
+        assert r["trials"] == 3
+        assert r["residual_raw"] >= r["residual"] - 1e-9
+    lim1 = next(r for r in recs if r["objects"] == 1 and r["limit"])
+    assert lim1["cameras"] is None and lim1["residual"] == 0.0
+    # More cameras, tighter hull (same drops for every N).
+    one = [r["residual"] for r in recs if r["objects"] == 1 and not r["limit"]]
+    assert one == sorted(one, reverse=True)
+    assert [f["objects"] for f in doc["fits"]] == [1, 3]
+
+
+def test_cameras_table(capsys):
+    assert cli.main(["study", *CAMERAS, "--workers", "0", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "slope" in out and "inf" in out
+
+
+def test_cameras_limit_cameras_option(capsys):
+    doc = run_json(capsys, "cameras", "--objects", "2", "--cameras", "4", "--trials", "1",
+                   "--limit-cameras", "64", "--workers", "0")
+    lim = [r for r in doc["records"] if r["limit"]]
+    assert lim[0]["cameras"] == 64 and lim[0]["method"] == "cameras"
+
+
+def test_static_and_moving_json_and_plots(capsys, tmp_path):
+    doc = run_json(capsys, *STATIC, "--workers", "0", "--plot", str(tmp_path / "s.png"))
+    assert {(r["tasker"], r["k"]) for r in doc["records"]} == {
+        (t, k) for t in ("uniform", "clustering", "optimal", "greedy") for k in (2, 3)}
+    by = {(r["tasker"], r["k"]): r["residual"] for r in doc["records"]}
+    for k in (2, 3):  # optimal is optimal on every trial, hence on average
+        assert by[("optimal", k)] <= min(by[(t, k)] for t in ("uniform", "greedy")) + 1e-9
+    doc = run_json(capsys, *MOVING, "--workers", "0", "--plot", str(tmp_path / "m.png"))
+    keys = {(r["tasker"], r["k"], r["update_every"]) for r in doc["records"]}
+    assert ("incremental", 3, 2) in keys and ("greedy", 2, 1) in keys
+    assert all(r["residual"] > 0 for r in doc["records"])
+    assert (tmp_path / "s.png").exists() and (tmp_path / "m.png").exists()
+
+
+@pytest.mark.slow
+def test_same_numbers_with_two_workers(capsys):
+    a = run_json(capsys, *CAMERAS, "--workers", "0")
+    b = run_json(capsys, *CAMERAS, "--workers", "2")
+    assert a["records"] == b["records"]
+    assert b["meta"]["workers"] == 2
+    c = run_json(capsys, *MOVING, "--workers", "0")
+    d = run_json(capsys, *MOVING, "--workers", "2")
+    assert c["records"] == d["records"]
+
+
+def test_seed_changes_numbers(capsys):
+    a = run_json(capsys, *CAMERAS, "--workers", "0")
+    b = run_json(capsys, *CAMERAS[:-1], "6", "--workers", "0")
+    assert a["records"] != b["records"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (("cameras", "--objects", "1,x"), "--objects: expected integers"),
+    (("cameras", "--cameras", "1,2"), "--cameras: expected integers >= 2"),
+    (("cameras", "--limit-cameras", "many"), "--limit-cameras"),
+    (("cameras", "--trials", "0"), "--trials: expected an integer >= 1"),
+    (("static", "--k", "2,17"), "--k: 17 cameras exceed the 16 candidates"),
+    (("static", "--taskers", "uniform,best"), "--taskers: unknown value 'best'; expected one of"),
+    (("moving", "--taskers", "optimal"), "--taskers: unknown value 'optimal'"),
+    (("moving", "--update-every", "0"), "--update-every: expected integers >= 1"),
+    (("static", "--plot", "fig.jpg"), "--plot: expected a .png"),
+])
+def test_bad_input_is_one_line(capsys, argv, message):
+    assert cli.main(["study", *argv, "--workers", "0", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("camtask study: error: ") and message in err
+    assert "\n" not in err
+
+
+def test_unreachable_scheduler_fails_fast(capsys):
+    code = cli.main(["study", "cameras", "--objects", "1", "--cameras", "2", "--trials", "1",
+                     "--scheduler", "tcp://127.0.0.1:9", "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err.startswith("camtask study: error: scheduler: cannot reach a Dask scheduler")
+    assert "\n" not in err

@@ -1,0 +1,56 @@
+"""The exact infinite-camera limit (testbed/studies/limit.py) against many cameras."""
+
+import numpy as np
+import pytest
+
+from scene.motion import random_drop
+from testbed.studies import core
+from testbed.studies.limit import bitangent_lines, covered, limit_residual
+
+OBJ = np.pi * 0.1**2
+
+
+def test_single_disc_has_no_residual():
+    assert limit_residual([[0.2, -0.3]], 0.1) == (0.0, 0.0)
+
+
+def test_bitangents_touch_both_discs():
+    c = np.array([[0.0, 0.0], [0.5, 0.2]])
+    r = np.array([0.1, 0.15])
+    lines = bitangent_lines(c, r)
+    assert lines.shape == (4, 3)
+    dist = np.abs(lines[:, :2] @ c.T - lines[:, 2:3])
+    assert np.allclose(dist, r[None, :])
+
+
+def test_covered_hand_case():
+    # Three discs at 0.15 around a point, 120 degrees apart, each block +-41.8 degrees of
+    # line directions around 0, 60 and 120 degrees (mod 180): every line is blocked.
+    c = 0.15 * np.array([[1.0, 0.0], [-0.5, 0.75**0.5], [-0.5, -0.75**0.5]])
+    assert covered(np.array([[0.0, 0.0], [0.0, 0.6]]), c, np.full(3, 0.1)).tolist() == [True, False]
+    # Four discs at 0.15 on the axes leave a gap between 41.8 and 48.2 degrees.
+    c4 = np.array([[0.15, 0.0], [-0.15, 0.0], [0.0, 0.15], [0.0, -0.15]])
+    assert not covered(np.zeros((1, 2)), c4, np.full(4, 0.1))[0]
+
+
+@pytest.mark.parametrize("seed, m", [(0, 3), (1, 6)])
+def test_exact_limit_is_the_many_camera_limit(seed, m):
+    room = core.circle_room()
+    centers = random_drop(room, np.full(m, 0.1), np.random.default_rng(seed))
+    raw, _ = limit_residual(centers, 0.1, h=0.002)
+    prev = np.inf
+    for n in (32, 128, 512):
+        xy, yaw = core.circle_cameras(n)
+        hull_raw = core.hull_residual(xy, yaw, centers, 0.1, room)[0] * OBJ
+        # Every finite hull contains the limit hull, and they close in on it.
+        assert hull_raw >= raw - 2e-4
+        assert hull_raw <= prev + 1e-9
+        prev = hull_raw
+    assert prev - raw < 0.02 * OBJ + 0.02 * raw
+
+
+def test_quadrature_converges():
+    centers = random_drop(core.circle_room(), np.full(8, 0.1), np.random.default_rng(3))
+    a = limit_residual(centers, 0.1, h=0.004)[0]
+    b = limit_residual(centers, 0.1, h=0.001)[0]
+    assert abs(a - b) < 0.01 * OBJ
