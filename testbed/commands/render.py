@@ -40,22 +40,6 @@ def parse_cameras(text: str | None):
         raise ValueError(f"--cameras: expected comma-separated camera numbers, got {text!r}") from None
 
 
-def with_people(scene, count: int | None):
-    """``scene`` with ``count`` people (default colours extended as needed)."""
-    import dataclasses
-
-    from scene.config import default_colours
-
-    if count is None or count == scene.people.count:
-        return scene
-    if count < 0:
-        raise ValueError(f"--people: expected a number >= 0, got {count}")
-    colours = default_colours(count).astype(np.uint8)
-    colours[: min(count, scene.people.count)] = scene.people.colours[:count]
-    people = dataclasses.replace(scene.people, count=count, colours=colours, positions=None)
-    return dataclasses.replace(scene, people=people)
-
-
 def versions() -> dict:
     out = {"python": platform.python_version()}
     for dist in ("numpy", "opencv-python-headless", "pyrender2", "PyOpenGL", "trimesh", "shapely", "camtask"):
@@ -72,8 +56,8 @@ def run(args: argparse.Namespace) -> int:
     from render import Renderer
     from scene import load_scene
     from scene.config import BUILTIN_SCENES, scene_path
-    from scene.motion import random_drop, random_waypoint
     from testbed.dataset import DatasetWriter, check_output_dir
+    from testbed.episode import walk, with_people
 
     if args.frames < 1:
         raise ValueError(f"--frames: expected a number >= 1, got {args.frames}")
@@ -83,14 +67,7 @@ def run(args: argparse.Namespace) -> int:
     cameras = parse_cameras(args.cameras)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
     people = scene.people
-    radii = np.full(people.count, people.radius)
-    if people.count:
-        initial = people.positions if people.positions is not None else \
-            random_drop(scene.room.polygon, radii, motion_rng)
-        track = random_waypoint(scene.room.polygon, radii, args.frames, scene.dt, people.speed,
-                                motion_rng, initial=initial)
-    else:
-        track = np.zeros((args.frames, 0, 2))
+    track = walk(scene, args.frames, motion_rng)
     with Renderer(scene, cameras) as renderer, \
             DatasetWriter(args.out, renderer.cameras, overwrite=args.overwrite) as writer:
         writer.write_background(renderer.background().rgb)

@@ -1,0 +1,43 @@
+"""What happens in an episode: who is in the scene and where they walk.
+
+Both ``camtask render`` and ``camtask run`` draw the walk the same way, so the same
+scene and seed give the same people on the same paths.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from scene import Scene
+from scene.config import default_colours
+from scene.motion import random_drop, random_waypoint
+
+
+def with_people(scene: Scene, count: int | None, *, option: str = "--people") -> Scene:
+    """``scene`` with ``count`` people (its own number when None); default colours as needed."""
+    if count is None or count == scene.people.count:
+        return scene
+    if count < 0:
+        raise ValueError(f"{option}: expected a number >= 0, got {count}")
+    capacity = scene.room.area / (np.pi * scene.people.radius**2) / 4
+    if count > capacity:
+        raise ValueError(f"{option}: {count} people of radius {scene.people.radius} m do not fit "
+                         f"in the room; expected at most {int(capacity)}")
+    colours = default_colours(count).astype(np.uint8)
+    colours[: min(count, scene.people.count)] = scene.people.colours[:count]
+    people = dataclasses.replace(scene.people, count=count, colours=colours, positions=None)
+    return dataclasses.replace(scene, people=people)
+
+
+def walk(scene: Scene, frames: int, rng: np.random.Generator) -> np.ndarray:
+    """Random-waypoint positions of the scene's people, (frames, people, 2) float, metres."""
+    people = scene.people
+    if people.count == 0:
+        return np.zeros((frames, 0, 2))
+    radii = np.full(people.count, people.radius)
+    initial = people.positions if people.positions is not None else \
+        random_drop(scene.room.polygon, radii, rng)
+    return random_waypoint(scene.room.polygon, radii, frames, scene.dt, people.speed, rng,
+                           initial=initial)

@@ -1,0 +1,233 @@
+"""The tasked camera network, closed in a loop over time (the paper's real system).
+
+Each frame only the tasked cameras send scanlines; the central node builds the visual
+hull from them through each camera's column -> bearing map, removes polygons smaller
+than one person, takes the polygon centres as object estimates, feeds them to the
+tracker, and the tasker chooses the next frame's cameras from them.
+
+Scanlines come from a *source*: :class:`LiveSource` renders and processes only the
+cameras asked for (nodes that are switched on); :class:`PrecomputedSource` serves
+scanlines computed beforehand for all cameras, so that several taskers can be compared
+on exactly the same data (the paper's figure 13).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pipeline import Pipeline, PipelineParams, scanline_bits
+from scene import Scene
+from scene.checks import check_int
+from tasking import (
+    TASKERS,
+    check_choice,
+    choose_cameras,
+    polygon_centres,
+    prune_small,
+    visual_hull_of_scanlines,
+)
+from tasking.track_metrics import tracking_metrics
+from tasking.tracker import Tracker, TrackerParams
+
+
+@dataclass(frozen=True)
+class LoopConfig:
+    """How the network is tasked.
+
+    tasker : one of :data:`tasking.TASKERS`
+    k : cameras tasked per frame
+    m : cameras swapped per incremental update
+    update_every : re-task every this many frames (1 = every frame)
+    feedback : "hull" (the paper: previous hull's polygon centres) or "tracks" (the
+        tracker's confirmed, temporally supported estimates, falling back to the hull)
+    """
+
+    tasker: str = "incremental"
+    k: int = 6
+    m: int = 1
+    update_every: int = 1
+    feedback: str = "hull"
+
+    def check(self, n_cameras: int) -> LoopConfig:
+        check_choice("tasker", self.tasker, TASKERS)
+        check_choice("feedback", self.feedback, ("hull", "tracks"))
+        k = check_int("k", self.k, minimum=1)
+        if k > n_cameras:
+            raise ValueError(f"k: expected at most {n_cameras} cameras (the scene has {n_cameras}), got {k}")
+        m = check_int("m", self.m, minimum=1)
+        if m > k:
+            raise ValueError(f"m: expected at most k = {k}, got {m}")
+        check_int("update_every", self.update_every, minimum=1)
+        return self
+
+
+@dataclass
+class FrameResult:
+    """What the central node saw and concluded in one frame.
+
+    tasked : 1-based camera numbers that sent scanlines
+    scanlines : (k, W) bool, in the order of ``tasked``
+    polygons : hull polygons after small-polygon removal (shapely)
+    hull_area : m^2, after small-polygon removal
+    residual : hull_area / true occupied area - 1
+    bits_sent : run-length coded bits sent by the tasked cameras
+    switched_on, switched_off : camera numbers that changed state before this frame
+    estimates : (p, 2) metres, polygon centres
+    truth : (people, 2) metres, true positions
+    track_ids, track_xy : confirmed tracks, (t,) int and (t, 2) metres
+    """
+
+    index: int
+    tasked: tuple[int, ...]
+    scanlines: np.ndarray
+    polygons: list
+    hull_area: float
+    residual: float
+    bits_sent: int
+    switched_on: tuple[int, ...]
+    switched_off: tuple[int, ...]
+    estimates: np.ndarray
+    truth: np.ndarray
+    track_ids: np.ndarray
+    track_xy: np.ndarray
+    rgb: np.ndarray | None = field(default=None, repr=False)
+
+    def to_json(self) -> dict:
+        return {
+            "frame": self.index,
+            "tasked": list(self.tasked),
+            "hull_area": self.hull_area,
+            "residual": self.residual,
+            "bits_sent": self.bits_sent,
+            "switched_on": list(self.switched_on),
+            "switched_off": list(self.switched_off),
+            "estimates": np.round(self.estimates, 4).tolist(),
+            "truth": np.round(self.truth, 4).tolist(),
+            "tracks": [{"id": int(i), "xy": np.round(p, 4).tolist()}
+                       for i, p in zip(self.track_ids, self.track_xy)],
+        }
+
+
+class LiveSource:
+    """Renders and processes only the cameras asked for, as switched-on nodes would.
+
+    A node that is switched on starts with a fresh temporal filter state.
+    scene : calibrated scene; params : pipeline parameters; rng : sensor noise
+    """
+
+    def __init__(self, scene: Scene, params: PipelineParams | None, rng: np.random.Generator,
+                 keep_frames: bool = False):
+        from render import Renderer
+
+        self.renderer = Renderer(scene)
+        background = self.renderer.background().rgb
+        self.pipes = {cam.number: Pipeline([cam], params, background=background[i:i + 1])
+                      for i, cam in enumerate(scene.cameras)}
+        self.bearings = {n: p.bearings[0] for n, p in self.pipes.items()}
+        self.rng = rng
+        self.keep_frames = keep_frames
+        self._on: set[int] = set()
+
+    def scanlines(self, index: int, positions_xy: np.ndarray, numbers: tuple[int, ...]):
+        """(k, W) bool scanlines of cameras ``numbers`` and, if kept, their RGB frames."""
+        frames = self.renderer.render(positions_xy, cameras=numbers, rng=self.rng)
+        out = []
+        for i, n in enumerate(numbers):
+            if n not in self._on:
+                self.pipes[n].reset()
+            out.append(self.pipes[n].process(frames.rgb[i:i + 1])[0])
+        self._on = set(numbers)
+        return np.array(out), (frames.rgb if self.keep_frames else None)
+
+    def close(self) -> None:
+        self.renderer.close()
+
+
+class PrecomputedSource:
+    """Scanlines computed beforehand for every camera: (frames, n_cams, W) bool."""
+
+    def __init__(self, scanlines: np.ndarray, bearings: np.ndarray):
+        self.all = np.asarray(scanlines, bool)
+        self.bearings = {i + 1: b for i, b in enumerate(np.asarray(bearings, float))}
+
+    def scanlines(self, index: int, positions_xy, numbers: tuple[int, ...]):
+        return self.all[index, np.asarray(numbers) - 1], None
+
+    def close(self) -> None:
+        pass
+
+
+def tracker_params(scene: Scene) -> TrackerParams:
+    """Tracker settings scaled to the people's size: gate 3 radii, noise half a radius."""
+    r = scene.people.radius
+    return TrackerParams(dt=scene.dt, gate=3 * r, meas_std=0.5 * r, accel_std=2.0 * scene.people.speed)
+
+
+def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_frame=None,
+             progress: bool = False):
+    """Run the tasked network over ``truth`` (frames, people, 2) metres; yield :class:`FrameResult`.
+
+    source : :class:`LiveSource` or :class:`PrecomputedSource`
+    on_frame : optional callback called with each result
+    """
+    from tqdm import tqdm
+
+    config.check(len(scene.cameras))
+    xy, yaw, fov = scene.floor_poses()
+    radius = scene.people.radius
+    object_area = np.pi * radius**2
+    occupied = max(len(truth[0]) if len(truth) else 0, 1) * object_area
+    uniform = scene.uniform_indices()
+    tasked = choose_cameras("uniform", config.k, xy, yaw, fov, np.zeros((0, 2)), radius,
+                            scene.room.polygon, uniform_sets=uniform)
+    tracker = Tracker(tracker_params(scene))
+    previous: tuple[int, ...] = ()
+    for t in tqdm(range(len(truth)), desc=f"{config.tasker} k={config.k}", unit="frame",
+                  disable=not progress):
+        numbers = tuple(int(i) + 1 for i in tasked)
+        scan, rgb = source.scanlines(t, truth[t], numbers)
+        bearings = np.array([source.bearings[n] for n in numbers])
+        hull = visual_hull_of_scanlines(xy[tasked], bearings, scan, scene.room.polygon)
+        polygons = prune_small(hull, object_area)
+        centres = polygon_centres(polygons)
+        ids, est = tracker.step(centres)
+        area = float(sum(p.area for p in polygons))
+        result = FrameResult(
+            index=t, tasked=numbers, scanlines=scan, polygons=polygons, hull_area=area,
+            residual=area / occupied - 1, bits_sent=int(scanline_bits(scan).sum()),
+            switched_on=tuple(sorted(set(numbers) - set(previous))) if previous else (),
+            switched_off=tuple(sorted(set(previous) - set(numbers))),
+            estimates=centres, truth=np.asarray(truth[t]), track_ids=ids, track_xy=est, rgb=rgb)
+        if on_frame is not None:
+            on_frame(result)
+        yield result
+        previous = numbers
+        if (t + 1) % config.update_every == 0 and config.tasker != "uniform":
+            estimates = centres
+            if config.feedback == "tracks" and len(tracker.estimates()):
+                estimates = tracker.estimates()
+            current = tasked if config.tasker == "incremental" else None
+            tasked = choose_cameras(config.tasker, config.k, xy, yaw, fov, estimates, radius,
+                                    scene.room.polygon, current=current, m=config.m,
+                                    uniform_sets=uniform, rng=np.random.default_rng(t))
+
+
+def summarise(results: list[FrameResult], scene: Scene) -> dict:
+    """Means over the run and tracking metrics against the true positions."""
+    n = len(results)
+    switches = sum(len(r.switched_on) + len(r.switched_off) for r in results)
+    people = len(results[0].truth) if n else 0
+    tracking = tracking_metrics(
+        [np.arange(people)] * n, [r.truth for r in results],
+        [r.track_ids for r in results], [r.track_xy for r in results],
+        max_distance=tracker_params(scene).gate) if n and people else {}
+    return {
+        "frames": n,
+        "hull_area": float(np.mean([r.hull_area for r in results])) if n else float("nan"),
+        "residual": float(np.mean([r.residual for r in results])) if n else float("nan"),
+        "bits_per_frame": float(np.mean([r.bits_sent for r in results])) if n else 0.0,
+        "camera_switches": switches,
+        "tracking": tracking,
+    }
