@@ -14,12 +14,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from .foreground import AngleTerms, background_model, check_frames, open_stacked
 from .params import PipelineParams
 from .rectify import Rectifier
-from .scanline import column_sums, median_threshold, spatial_smooth, temporal_smooth, true_scanlines
+from .scanline import median_threshold, spatial_smooth, temporal_smooth, true_scanlines
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,19 +118,19 @@ class Pipeline:
         opened = self._foreground_stacked(frames)
         rect = self.rectifier.remap_stacked(opened)
         p = self.params
-        smoothed = temporal_smooth(spatial_smooth(column_sums(rect), p.spatial_kernel), self._state,
+        smoothed = temporal_smooth(spatial_smooth(_counts(rect), p.spatial_kernel), self._state,
                                    p.temporal_alpha)
         self._state = smoothed
         scan = median_threshold(smoothed, p.median_kernel, p.column_threshold)
-        fg = opened.reshape(self._buf.shape)[:, :self.height].view(bool)
-        return StepOutput(fg, rect.view(bool), smoothed, scan)
+        fg = opened.reshape(self._buf.shape)[:, :self.height] != 0
+        return StepOutput(fg, rect != 0, smoothed, scan)
 
     def process(self, frames) -> np.ndarray:
         """(n_cams, H, W, 3) uint8 RGB -> (n_cams, W) bool scanlines; updates the temporal state."""
         opened = self._foreground_stacked(frames)
         rect = self.rectifier.remap_stacked(opened)
         p = self.params
-        sums = column_sums(rect)
+        sums = _counts(rect)
         smoothed = temporal_smooth(spatial_smooth(sums, p.spatial_kernel), self._state, p.temporal_alpha)
         self._state = smoothed
         return median_threshold(smoothed, p.median_kernel, p.column_threshold)
@@ -155,3 +156,9 @@ class Pipeline:
             raise ValueError(f"labels: expected shape ({n}, {h}, {w}), got {tuple(lab.shape)}")
         mask = lab > 0
         return mask, true_scanlines(self.rectifier.rectify(mask))
+
+
+def _counts(rect: np.ndarray) -> np.ndarray:
+    """Column sums of rectified 0/255 masks (n_cams, Ho, W) -> (n_cams, W) float64 pixel counts."""
+    sums = np.stack([cv2.reduce(r, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S)[0] for r in rect])
+    return sums.astype(np.float64) / 255.0

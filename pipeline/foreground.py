@@ -85,22 +85,17 @@ class AngleTerms:
         self.any_dark_bg = bool(self.dark_bg.any())
 
     def mask(self, frames: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """Foreground of ``frames`` (n_cams, H, W, 3) uint8 into ``out`` (n_cams, H, W) uint8 0/1."""
-        for i in range(frames.shape[0]):  # per camera: OpenCV kernels, cache-sized arrays
+        """Foreground of ``frames`` (n_cams, H, W, 3) uint8 into ``out`` (n_cams, H, W) uint8 0/255."""
+        for i in range(frames.shape[0]):  # per camera: OpenCV kernels on cache-sized arrays
             f = frames[i]
             dot = cv2.transform(cv2.multiply(f, self.background[i], dtype=cv2.CV_32F), _ONES)
             aa = cv2.transform(cv2.multiply(f, f, dtype=cv2.CV_32F), _ONES)
-            lhs = cv2.multiply(dot, dot)
-            rhs = cv2.multiply(aa, self.c2bb[i])
-            cv2.compare(lhs, rhs, cv2.CMP_LT, dst=out[i])
+            cv2.compare(cv2.multiply(dot, dot), cv2.multiply(aa, self.c2bb[i]), cv2.CMP_LT, dst=out[i])
             if self.floor2 > 0:
-                dark = aa < self.floor2
-                if self.any_dark_bg:
-                    dark |= self.dark_bg[i]
-                if dark.any():
-                    diff2 = aa[dark] + self.bb[i][dark] - 2 * dot[dark]
-                    out[i][dark] = diff2 > self.delta2
-        np.minimum(out, 1, out=out)
+                dark = cv2.compare(cv2.min(aa, self.bb[i]), float(self.floor2), cv2.CMP_LT)
+                if cv2.countNonZero(dark):
+                    diff2 = cv2.scaleAdd(dot, -2.0, cv2.add(aa, self.bb[i]))
+                    cv2.copyTo(cv2.compare(diff2, float(self.delta2), cv2.CMP_GT), dark, out[i])
         return out
 
 
@@ -117,7 +112,7 @@ def colour_angle_foreground(frames, background, threshold_deg: float, brightness
     frames = check_frames("frames", frames, background.shape[:3])
     out = np.empty(frames.shape[:3], np.uint8)
     AngleTerms(background, threshold_deg, brightness_floor, dark_delta).mask(frames, out)
-    return out.view(bool)
+    return out != 0
 
 
 def open_masks(masks, kernel: int) -> np.ndarray:
@@ -149,7 +144,7 @@ def open_masks(masks, kernel: int) -> np.ndarray:
 def open_stacked(stacked: np.ndarray, kernel: int) -> np.ndarray:
     """Opening of a stack of masks laid out with >= kernel // 2 zero rows between them.
 
-    stacked : (rows, W) uint8 0/1. One OpenCV call for all cameras; the zero rows keep the
+    stacked : (rows, W) uint8, 0 or 255 (any one non-zero value). One OpenCV call for all cameras; the zero rows keep the
     cameras apart, and the constant-zero border makes edges behave like the separators.
     """
     if kernel == 1:

@@ -1,0 +1,81 @@
+"""Benchmark: ms per 640x480 frame, production pipeline vs a straightforward reference.
+
+    .venv/bin/python bench/pipeline.py [--dir RENDER_DIR] [--frames N] [--repeat R] [--json]
+
+One OpenCV thread (cv2.setNumThreads(1)). Both implementations process the same frames
+of all 16 lab cameras (a render directory, or synthetic lab frames) from the same
+background model; the scanlines must be identical. Times are the best of ``--repeat``
+passes over the sequence, divided by frames x cameras.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import scene  # noqa: E402
+from pipeline import Pipeline, background_model, load_params  # noqa: E402
+from pipeline.reference import ReferencePipeline  # noqa: E402
+
+
+def load_data(args):
+    if args.dir:
+        from pipeline.io import RenderDir
+        r = RenderDir(args.dir)
+        n = min(args.frames, len(r))
+        return r.cameras, r.background(), np.stack([r.frames(i) for i in range(n)])
+    from pipeline.synthetic import synthetic_sequence
+    cams = scene.load_scene("lab").cameras
+    bg, frames, _ = synthetic_sequence(cams, args.frames, np.random.default_rng(0))
+    return cams, bg, frames
+
+
+def best_time(make, frames, repeat):
+    best, out = np.inf, None
+    for _ in range(repeat):
+        pipe = make()
+        t0 = time.perf_counter()
+        out = [pipe.process(f) for f in frames]
+        best = min(best, time.perf_counter() - t0)
+    return best, np.stack(out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dir", help="render directory (default: synthetic lab frames)")
+    ap.add_argument("--frames", type=int, default=5)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args(argv)
+    cv2.setNumThreads(1)
+    cams, bg, frames = load_data(args)
+    params = load_params()
+    model = background_model(bg)
+    n = frames.shape[0] * frames.shape[1]
+    t_prod, s_prod = best_time(lambda: Pipeline(cams, params, model), frames, args.repeat)
+    t_ref, s_ref = best_time(lambda: ReferencePipeline(cams, params, model), frames, max(1, args.repeat // 2))
+    res = {"production_ms": 1e3 * t_prod / n, "reference_ms": 1e3 * t_ref / n,
+           "identical": bool(np.array_equal(s_prod, s_ref)), "frames": int(frames.shape[0]),
+           "cameras": int(frames.shape[1]), "resolution": [int(frames.shape[3]), int(frames.shape[2])],
+           "source": args.dir or "synthetic lab"}
+    res["speedup"] = res["reference_ms"] / res["production_ms"]
+    if args.json:
+        print(json.dumps(res))
+    else:
+        print(f"{res['frames']} frames x {res['cameras']} cameras, {res['resolution'][0]}x{res['resolution'][1]} "
+              f"({res['source']}), one OpenCV thread")
+        print(f"production {res['production_ms']:.2f} ms/frame, reference {res['reference_ms']:.2f} ms/frame, "
+              f"speed-up {res['speedup']:.1f}x, identical scanlines: {res['identical']}")
+    return 0 if res["identical"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
