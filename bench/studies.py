@@ -1,0 +1,61 @@
+"""Benchmarks for the studies: the "infinite"-camera case and the cameras study.
+
+    .venv/bin/python bench/studies.py            # limit: 2000-camera hull vs exact
+    .venv/bin/python bench/studies.py --study 50 # also the cameras study, 1 and 2 workers
+
+Prints wall times; numbers for docs/performance.md (## Studies).
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+
+def bench_limit(objects: int, seed: int) -> None:
+    from scene.motion import random_drop
+    from testbed.studies import core
+    from testbed.studies.limit import limit_residual
+
+    room = core.circle_room()
+    centers = random_drop(room, np.full(objects, 0.1), np.random.default_rng(seed))
+    obj = np.pi * 0.01
+    t = time.perf_counter()
+    raw, pruned = limit_residual(centers, 0.1)
+    t_exact = time.perf_counter() - t
+    xy, yaw = core.circle_cameras(2000)
+    t = time.perf_counter()
+    h_raw, h_pruned, _ = core.hull_residual(xy, yaw, centers, 0.1, room)
+    t_hull = time.perf_counter() - t
+    print(f"{objects} objects, seed {seed}: exact limit {raw / obj:.4f} raw / {pruned / obj:.4f} pruned "
+          f"in {t_exact:.3f} s; 2000 cameras {h_raw:.4f} raw / {h_pruned:.4f} pruned in {t_hull:.2f} s")
+
+
+def bench_study(trials: int, workers: int) -> float:
+    code = ("import sys, testbed.cli as c; c.COMMANDS = ('testbed.commands.study',)\n"
+            "if __name__ == '__main__': sys.exit(c.main(sys.argv[1:]))")
+    argv = [sys.executable, "-c", code, "study", "cameras", "--trials", str(trials),
+            "--workers", str(workers), "--json", "--no-progress"]
+    t = time.perf_counter()
+    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - t
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("--study", type=int, default=0, metavar="TRIALS",
+                   help="also time `camtask study cameras --trials TRIALS` with 1 and 2 workers")
+    a = p.parse_args()
+    for objects, seed in ((5, 0), (10, 0)):
+        bench_limit(objects, seed)
+    if a.study:
+        for w in (1, 2):
+            print(f"cameras study, {a.study} trials, {w} worker(s): {bench_study(a.study, w):.1f} s")
+
+
+if __name__ == "__main__":
+    main()
