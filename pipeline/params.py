@@ -65,14 +65,14 @@ class PipelineParams:
         the rectified mask) exceeds this, > 0
     """
 
-    threshold_deg: float = 6.0
-    brightness_floor: float = 30.0
-    dark_delta: float = 30.0
-    opening_kernel: int = 3
-    spatial_kernel: int = 5
-    temporal_alpha: float = 0.8
-    median_kernel: int = 5
-    column_threshold: float = 8.0
+    threshold_deg: float = 5.5
+    brightness_floor: float = 60.0
+    dark_delta: float = 75.0
+    opening_kernel: int = 5
+    spatial_kernel: int = 1
+    temporal_alpha: float = 0.9
+    median_kernel: int = 7
+    column_threshold: float = 32.0
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
