@@ -18,6 +18,8 @@ COMMANDS = (
     "testbed.commands.study",
     "testbed.commands.scanlines",
     "testbed.commands.tune",
+    "testbed.commands.run",
+    "testbed.commands.demo",
 )
 
 

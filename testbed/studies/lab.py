@@ -1,0 +1,130 @@
+"""Study ``lab``: taskers on the rendered lab (the paper's figure 13).
+
+Each trial draws a walk of ``--people`` people in the lab, renders all 16 cameras every
+frame and turns every frame into a scanline with the node pipeline (nodes process all
+the time; only tasked nodes *send*). Every tasker and k then runs the closed loop on
+exactly these scanlines. The residual is the paper's: the time-averaged hull area
+(after removing polygons smaller than one person) divided by the minimum hull area
+reached with all 16 cameras over the run.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import core
+
+STUDY_ID = 5
+DEFAULT_TRIALS = 2
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--scene", default="lab", help="calibrated scene file or built-in name (default lab)")
+    p.add_argument("--people", type=int, default=3, help="people walking (default 3, as the paper)")
+    p.add_argument("--k", default="6,8,10", help="numbers of tasked cameras (default 6,8,10)")
+    p.add_argument("--taskers", default="uniform,greedy,incremental",
+                   help="comma-separated taskers (default uniform,greedy,incremental)")
+    p.add_argument("--frames", type=int, default=40, help="frames per trial (default 40, 5.3 s)")
+    p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
+    p.add_argument("--update-every", type=int, default=1, help="incremental re-tasking period (default 1)")
+    p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default: built-in)")
+
+
+def parse(args) -> dict:
+    from scene import load_scene
+    from testbed.episode import with_people
+
+    scene = with_people(load_scene(args.scene), args.people)
+    if not scene.is_calibrated:
+        raise ValueError(f"--scene: {scene.name!r} has floor-plane cameras only; the lab study renders")
+    if args.people < 1:
+        raise ValueError(f"--people: expected an integer >= 1, got {args.people}")
+    ks = core.parse_ints("k", args.k, minimum=1)
+    if max(ks) > len(scene.cameras):
+        raise ValueError(f"--k: {max(ks)} cameras exceed the scene's {len(scene.cameras)}")
+    taskers = core.parse_names("taskers", args.taskers, [t for t in core.TASKERS if t != "optimal"])
+    for name in ("frames", "m", "update_every"):
+        if getattr(args, name) < 1:
+            raise ValueError(f"--{name.replace('_', '-')}: expected an integer >= 1, got {getattr(args, name)}")
+    if args.m > min(ks):
+        raise ValueError(f"--m: expected at most the smallest k = {min(ks)}, got {args.m}")
+    return {"scene": args.scene, "people": args.people, "k": ks, "taskers": taskers,
+            "frames": args.frames, "m": args.m, "update_every": args.update_every, "params": args.params}
+
+
+def render_scanlines(scene, params, truth: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray]:
+    """All cameras' scanlines over the walk: (frames, n_cams, W) bool and bearings (n_cams, W)."""
+    from pipeline import Pipeline
+    from render import Renderer
+
+    with Renderer(scene) as renderer:
+        pipe = Pipeline(scene.cameras, params, background=renderer.background().rgb)
+        scans = np.stack([pipe.process(renderer.render(p, rng=rng).rgb) for p in truth])
+    return scans, pipe.bearings
+
+
+def run_trial(trial: int, opts: dict, seed: int) -> dict:
+    """One walk: mean hull area per (tasker, k) and the minimum 16-camera hull area."""
+    from pipeline import load_params
+    from scene import load_scene
+    from testbed.episode import walk, with_people
+    from testbed.loop import LoopConfig, PrecomputedSource, run_loop
+
+    scene = with_people(load_scene(opts["scene"]), opts["people"])
+    motion_rng, sensor_rng = core.trial_rng(seed, STUDY_ID, trial).spawn(2)
+    truth = walk(scene, opts["frames"], motion_rng)
+    scans, bearings = render_scanlines(scene, load_params(opts["params"]), truth, sensor_rng)
+    source = PrecomputedSource(scans, bearings)
+    n = len(scene.cameras)
+    full = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", n), truth, source)]
+    areas = {}
+    for tasker in opts["taskers"]:
+        for k in opts["k"]:
+            config = LoopConfig(tasker, k, opts["m"], opts["update_every"])
+            areas[f"{tasker}:{k}"] = float(np.mean([r.hull_area for r in run_loop(scene, config, truth, source)]))
+    return {"areas": areas, "min_full": float(np.min(full)), "mean_full": float(np.mean(full))}
+
+
+def run(opts: dict, trials: int, seed: int, runner) -> dict:
+    per_trial = runner(run_trial, [(t, opts, seed) for t in range(trials)], [opts["frames"]] * trials, "lab")
+    records = []
+    for tasker in opts["taskers"]:
+        for k in opts["k"]:
+            values = [t["areas"][f"{tasker}:{k}"] / t["min_full"] for t in per_trial]
+            mean, sem = core.mean_sem(values)
+            records.append({"tasker": tasker, "k": k, "residual": mean, "residual_sem": sem, "trials": trials})
+    full = float(np.mean([t["mean_full"] / t["min_full"] for t in per_trial]))
+    return {"records": records, "all_cameras_residual": full}
+
+
+def format_table(result: dict) -> str:
+    recs = result["records"]
+    taskers = list(dict.fromkeys(r["tasker"] for r in recs))
+    t = {(r["tasker"], r["k"]): r for r in recs}
+    lines = ["Normalised residual hull area on the rendered lab (hull area / min 16-camera area):",
+             f"{'k':>3} " + "".join(f"{n:>13}" for n in taskers)]
+    for k in sorted({r["k"] for r in recs}):
+        lines.append(f"{k:>3} " + "".join(f"{t[(n, k)]['residual']:13.3f}" for n in taskers))
+    lines.append(f"all 16 cameras: {result['all_cameras_residual']:.3f}")
+    return "\n".join(lines)
+
+
+def plot(result: dict, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    recs = result["records"]
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for tasker in dict.fromkeys(r["tasker"] for r in recs):
+        rs = [r for r in recs if r["tasker"] == tasker]
+        ax.errorbar([r["k"] for r in rs], [r["residual"] for r in rs],
+                    yerr=[r["residual_sem"] for r in rs], marker="o", capsize=3, label=tasker)
+    ax.axhline(result["all_cameras_residual"], color="0.5", ls="--", label="all 16 cameras")
+    ax.set(xlabel="number of cameras tasked k", ylabel="hull area / min 16-camera area",
+           title="Fig. 13: taskers on the rendered lab")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)

@@ -1,0 +1,107 @@
+"""Pictures of the network: a top view of the room and a mosaic of tasked frames.
+
+Drawn with OpenCV on uint8 RGB canvases (fast enough for every video frame).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from scene import Scene
+
+BACKGROUND = (250, 250, 250)
+WALL = (60, 60, 60)
+HULL = (240, 150, 40)
+CONE = (120, 160, 230)
+TRUTH = (20, 140, 20)
+TRACK = (200, 30, 30)
+CAMERA_ON = (200, 30, 30)
+CAMERA_OFF = (150, 150, 150)
+
+
+class TopView:
+    """Maps floor coordinates (metres) to pixels of a ``size``-pixel-wide canvas."""
+
+    def __init__(self, scene: Scene, width: int = 640, margin: int = 30):
+        self.scene = scene
+        lo = scene.room.vertices.min(axis=0)
+        hi = scene.room.vertices.max(axis=0)
+        self.scale = (width - 2 * margin) / (hi[0] - lo[0])
+        self.lo, self.margin = lo, margin
+        self.width = width
+        self.height = round((hi[1] - lo[1]) * self.scale + 2 * margin)
+        self.tails: dict[int, list] = {}
+        self.inside = np.zeros((self.height, self.width), np.uint8)
+        cv2.fillPoly(self.inside, [self.px(scene.room.vertices)], 1)
+
+    def px(self, xy) -> np.ndarray:
+        """Floor points (..., 2) metres -> pixel points (..., 2) int32 (u right, v down; y up)."""
+        xy = np.asarray(xy, float)
+        u = self.margin + (xy[..., 0] - self.lo[0]) * self.scale
+        v = self.height - self.margin - (xy[..., 1] - self.lo[1]) * self.scale
+        return np.stack([u, v], axis=-1).round().astype(np.int32)
+
+    def draw(self, result, bearings: dict[int, np.ndarray], title: str = "") -> np.ndarray:
+        """(height, width, 3) uint8 RGB top view of one :class:`testbed.loop.FrameResult`."""
+        img = np.full((self.height, self.width, 3), BACKGROUND, np.uint8)
+        reach = 2 * float(np.ptp(self.scene.room.vertices, axis=0).max())
+        xy, _, _ = self.scene.floor_poses()
+        cones = img.copy()
+        for n, scan in zip(result.tasked, result.scanlines):
+            c = xy[n - 1]
+            b = bearings[n]
+            for lo, hi in _runs(scan):
+                a0, a1 = b[lo], b[hi - 1]
+                fan = np.linspace(a0, a1, 8)
+                pts = np.vstack([c, c + reach * np.column_stack([np.cos(fan), np.sin(fan)])])
+                cv2.fillPoly(cones, [self.px(pts)], CONE)
+        cones[self.inside == 0] = BACKGROUND            # cones end at the walls
+        img = cv2.addWeighted(cones, 0.35, img, 0.65, 0)
+        for p in result.polygons:
+            cv2.fillPoly(img, [self.px(np.asarray(p.exterior.coords))], HULL)
+        cv2.polylines(img, [self.px(self.scene.room.vertices)], True, WALL, 2, cv2.LINE_AA)
+        r = max(2, int(self.scene.people.radius * self.scale))
+        for p in result.truth:
+            cv2.circle(img, tuple(self.px(p)), r, TRUTH, 2, cv2.LINE_AA)
+        for i, p in zip(result.track_ids, result.track_xy):
+            tail = self.tails.setdefault(int(i), [])
+            tail.append(p)
+            cv2.polylines(img, [self.px(np.array(tail[-40:]))], False, TRACK, 1, cv2.LINE_AA)
+            cv2.drawMarker(img, tuple(self.px(p)), TRACK, cv2.MARKER_CROSS, 10, 2)
+            cv2.putText(img, str(int(i)), tuple(self.px(p) + 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, TRACK, 1)
+        for n in range(1, len(xy) + 1):
+            on = n in result.tasked
+            q = tuple(self.px(xy[n - 1]))
+            cv2.circle(img, q, 6 if on else 4, CAMERA_ON if on else CAMERA_OFF, -1, cv2.LINE_AA)
+            cv2.putText(img, str(n), (q[0] + 6, q[1] - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, WALL, 1)
+        text = title or f"frame {result.index}  hull {result.hull_area:.2f} m2  residual {result.residual:.2f}"
+        cv2.putText(img, text, (8, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, WALL, 1, cv2.LINE_AA)
+        return img
+
+
+def mosaic(rgb: np.ndarray, scanlines: np.ndarray, numbers, width: int, columns: int = 3) -> np.ndarray:
+    """Tasked frames (k, H, W, 3) with their scanlines (k, W) drawn under them, tiled.
+
+    Returns (rows * tile_h, width, 3) uint8 RGB.
+    """
+    k, h, w, _ = rgb.shape
+    tw = width // columns
+    th = round(h * tw / w)
+    strip = 10
+    rows = -(-k // columns)
+    out = np.full((rows * (th + strip + 4), width, 3), 255, np.uint8)
+    for i in range(k):
+        r, c = divmod(i, columns)
+        y, x = r * (th + strip + 4), c * tw
+        out[y:y + th, x:x + tw] = cv2.resize(rgb[i], (tw, th), interpolation=cv2.INTER_AREA)
+        line = cv2.resize(scanlines[i].astype(np.uint8)[None] * 255, (tw, strip), interpolation=cv2.INTER_NEAREST)
+        out[y + th:y + th + strip, x:x + tw] = np.where(line[..., None] > 0, (0, 0, 0), (220, 220, 220))
+        cv2.putText(out, f"cam {numbers[i]}", (x + 4, y + 14), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 0), 1)
+    return out
+
+
+def _runs(scan: np.ndarray) -> list[tuple[int, int]]:
+    """[start, stop) column ranges of the True runs of a (W,) bool scanline."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], scan.astype(np.int8), [0]])))
+    return list(zip(edges[::2], edges[1::2]))

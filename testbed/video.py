@@ -1,0 +1,56 @@
+"""MP4 output through imageio-ffmpeg's bundled ffmpeg, written atomically."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+
+class VideoWriter:
+    """Collects RGB frames into ``path`` (H.264 MP4); the file appears only when closed cleanly.
+
+    Frames of a different size than the first are padded or cropped to it.
+    """
+
+    def __init__(self, path: str | os.PathLike, fps: float):
+        import imageio_ffmpeg
+
+        self.path = Path(path)
+        if not self.path.parent.exists():
+            raise FileNotFoundError(f"--video: folder {self.path.parent} does not exist")
+        self.tmp = self.path.with_name(f".{self.path.stem}.partial{self.path.suffix}")
+        self.fps = fps
+        self._ffmpeg = imageio_ffmpeg
+        self._gen = None
+        self._size = None
+
+    def write(self, frame: np.ndarray) -> None:
+        frame = np.ascontiguousarray(frame, np.uint8)
+        if self._gen is None:
+            h, w = frame.shape[:2]
+            self._size = (w - w % 2, h - h % 2)
+            self._gen = self._ffmpeg.write_frames(
+                str(self.tmp), self._size, fps=self.fps, codec="libx264", pix_fmt_in="rgb24",
+                quality=7, macro_block_size=2, ffmpeg_log_level="error")
+            self._gen.send(None)
+        w, h = self._size
+        canvas = np.full((h, w, 3), 255, np.uint8)
+        hh, ww = min(h, frame.shape[0]), min(w, frame.shape[1])
+        canvas[:hh, :ww] = frame[:hh, :ww]
+        self._gen.send(canvas)
+
+    def close(self, ok: bool = True) -> None:
+        if self._gen is not None:
+            self._gen.close()
+        if ok and self._gen is not None:
+            os.replace(self.tmp, self.path)
+        elif self.tmp.exists():
+            self.tmp.unlink()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        self.close(ok=exc_type is None)
