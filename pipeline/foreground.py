@@ -81,18 +81,22 @@ class AngleTerms:
         self.c2bb = (c * c * self.bb).astype(np.float32)
         self.floor2 = np.float32(brightness_floor) ** 2
         self.delta2 = np.float32(dark_delta) ** 2
-        self.dark_bg = self.bb < self.floor2
+        self.dark_bg = (self.bb < self.floor2).astype(np.uint8) * 255
         self.any_dark_bg = bool(self.dark_bg.any())
 
     def mask(self, frames: np.ndarray, out: np.ndarray) -> np.ndarray:
         """Foreground of ``frames`` (n_cams, H, W, 3) uint8 into ``out`` (n_cams, H, W) uint8 0/255."""
+        h, w = frames.shape[1:3]
+        ff = np.empty((h, w, 3), np.float32)
         for i in range(frames.shape[0]):  # per camera: OpenCV kernels on cache-sized arrays
-            f = frames[i]
-            dot = cv2.transform(cv2.multiply(f, self.background[i], dtype=cv2.CV_32F), _ONES)
-            aa = cv2.transform(cv2.multiply(f, f, dtype=cv2.CV_32F), _ONES)
+            ff[...] = frames[i]
+            dot = cv2.transform(cv2.multiply(ff, self.background[i]), _ONES)
+            aa = cv2.transform(cv2.multiply(ff, ff), _ONES)
             cv2.compare(cv2.multiply(dot, dot), cv2.multiply(aa, self.c2bb[i]), cv2.CMP_LT, dst=out[i])
             if self.floor2 > 0:
-                dark = cv2.compare(cv2.min(aa, self.bb[i]), float(self.floor2), cv2.CMP_LT)
+                dark = cv2.compare(aa, float(self.floor2), cv2.CMP_LT)
+                if self.any_dark_bg:
+                    cv2.bitwise_or(dark, self.dark_bg[i], dst=dark)
                 if cv2.countNonZero(dark):
                     diff2 = cv2.scaleAdd(dot, -2.0, cv2.add(aa, self.bb[i]))
                     cv2.copyTo(cv2.compare(diff2, float(self.delta2), cv2.CMP_GT), dark, out[i])
