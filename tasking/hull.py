@@ -55,8 +55,9 @@ __all__ = [
 
 
 def free_wedges_from_discs(
-    camera_xy, camera_yaw, fov, centers, radii, room, *, strict: bool = True
-) -> np.ndarray:
+    camera_xy, camera_yaw, fov, centers, radii, room, *, strict: bool = True,
+    return_cones: bool = False,
+):
     """Per-camera union of free wedges (not clipped to the room), from object discs.
 
     Parameters
@@ -70,11 +71,15 @@ def free_wedges_from_discs(
     strict : bool
         Validate the objects as real ones (disjoint, inside the room, no camera inside).
         Estimated discs (``strict=False``) may overlap; a camera inside one is blind.
+    return_cones : bool
+        Also return the free wedges as a table ``(camera (q,) int, apex (q, 2),
+        theta0 (q,), theta1 (q,))``, world-frame radians, grouped by camera.
 
     Returns
     -------
     (n,) object array of MultiPolygons, world frame: what each camera proves empty
-    (intersect with ``room`` for the empty region proper).
+    (intersect with ``room`` for the empty region proper); with ``return_cones`` a
+    tuple ``(wedges, cones)``.
     """
     room = check_room(room)
     camera_xy = check_points("camera_xy", camera_xy)
@@ -90,7 +95,8 @@ def free_wedges_from_discs(
     half = 0.5 * fov
     lo, hi = cones.disc_intervals(camera_xy, camera_yaw, centers, radii)
     lo, hi = cones.clip_to_fov(lo, hi, half)
-    return _wedges(camera_xy, camera_yaw, half, lo, hi, room)
+    wedges, table = _wedges(camera_xy, camera_yaw, half, lo, hi, room)
+    return (wedges, table) if return_cones else wedges
 
 
 def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room) -> np.ndarray:
@@ -131,14 +137,16 @@ def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room) -> np.ndarr
     yaw, fov, lo, hi = cones.scanline_intervals(bearings, scanlines)
     if np.any(fov >= 2 * np.pi):
         raise ValueError("bearings: the columns of a camera must span less than 2*pi")
-    return _wedges(camera_xy, yaw, 0.5 * fov, lo, hi, room)
+    return _wedges(camera_xy, yaw, 0.5 * fov, lo, hi, room)[0]
 
 
 def _wedges(camera_xy, yaw, half, lo, hi, room) -> np.ndarray:
     camera, a0, a1 = cones.free_intervals(lo, hi, half)
     radius = cones.wedge_radius(room, camera_xy)
-    polys = cones.wedge_polygons(camera_xy[camera], yaw[camera] + a0, yaw[camera] + a1, radius)
-    return cones.group_by_camera(polys, camera, camera_xy.shape[0])
+    theta0, theta1 = yaw[camera] + a0, yaw[camera] + a1
+    polys = cones.wedge_polygons(camera_xy[camera], theta0, theta1, radius)
+    table = (camera, camera_xy[camera], theta0, theta1)
+    return cones.group_by_camera(polys, camera, camera_xy.shape[0]), table
 
 
 def hull_from_wedges(wedges, room: Polygon, subset=None) -> BaseGeometry:

@@ -38,6 +38,7 @@ from shapely.geometry import Polygon
 from .checks import check_choice, check_indices, check_int, check_points, check_radii
 from .clustering import clustering_select, pair_axes
 from .coverage import coverage_cells, optimal_subset
+from .fan import cone_areas, ring_edges, split_wide
 from .hull import free_wedges_from_discs, hull_from_wedges
 
 __all__ = [
@@ -61,8 +62,36 @@ LAZY_TOL = 1e-9
 
 
 def _gains(hull, wedges: np.ndarray) -> np.ndarray:
-    """Area each wedge set would remove from ``hull``: (c,) float, m^2."""
+    """Area each wedge set would remove from ``hull`` (polygon overlays): (c,) float, m^2."""
     return shapely.area(shapely.intersection(hull, wedges))
+
+
+class Gains:
+    """Gains ``area(hull ∩ wedges[c])`` of candidate cameras.
+
+    With the wedge table (``cones``, from ``free_wedges_from_discs(...,
+    return_cones=True)``) gains come from the exact triangle-fan formula of
+    :mod:`tasking.fan` (pure numpy, one call for all candidates); without it, from one
+    polygon overlay per candidate. A candidate's gain is the same float whether it is
+    evaluated alone or with others, so greedy and lazy greedy agree exactly.
+    """
+
+    def __init__(self, wedges, cones=None):
+        self.wedges = np.asarray(wedges, dtype=object)
+        self.n = self.wedges.size
+        self.cones = None if cones is None else split_wide(*cones)
+        self._hull, self._edges = None, None
+
+    def __call__(self, hull, cand) -> np.ndarray:
+        cand = np.atleast_1d(np.asarray(cand, dtype=np.intp))
+        if self.cones is None:
+            return _gains(hull, self.wedges[cand])
+        if hull is not self._hull:
+            self._hull, self._edges = hull, ring_edges(hull)
+        camera, apex, t0, t1 = self.cones
+        rows = np.isin(camera, cand)
+        areas = cone_areas(*self._edges, apex[rows], t0[rows], t1[rows])
+        return np.bincount(camera[rows], weights=areas, minlength=self.n)[cand]
 
 
 def uniform_select(n: int, k: int) -> np.ndarray:
@@ -74,7 +103,7 @@ def uniform_select(n: int, k: int) -> np.ndarray:
     return np.floor(np.arange(k) * n / k + 0.5).astype(np.intp)
 
 
-def greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
+def greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones=None):
     """Paper algorithm 4.4: add k cameras one at a time, each minimising the hull area.
 
     Parameters
@@ -84,6 +113,7 @@ def greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
     k : number of cameras to add
     start : sequence of camera indices already tasked (not candidates)
     hull : hull of ``start`` if known (default: recomputed)
+    cones : optional wedge table for fast gains (see :class:`Gains`)
 
     Returns
     -------
@@ -91,20 +121,21 @@ def greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
     hull : shapely geometry, the hull of ``start`` plus ``chosen``
     """
     wedges = np.asarray(wedges, dtype=object)
+    gains = Gains(wedges, cones)
     avail = np.ones(wedges.size, dtype=bool)
     avail[list(start)] = False
     h = hull_from_wedges(wedges, room, list(start)) if hull is None else hull
     chosen = []
     for _ in range(k):
         cand = np.flatnonzero(avail)
-        best = int(cand[np.argmax(_gains(h, wedges[cand]))])  # first max: lowest index
+        best = int(cand[np.argmax(gains(h, cand))])  # first max: lowest index
         h = h.difference(wedges[best])
         avail[best] = False
         chosen.append(best)
     return chosen, h
 
 
-def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
+def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones=None):
     """Lazy (CELF) greedy: the same choice as :func:`greedy_select`, fewer evaluations.
 
     Stale gains are upper bounds (submodularity). A freshly evaluated camera is taken
@@ -113,13 +144,14 @@ def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
     cannot change the choice. Same parameters and returns as :func:`greedy_select`.
     """
     wedges = np.asarray(wedges, dtype=object)
+    gain = Gains(wedges, cones)
     h = hull_from_wedges(wedges, room, list(start)) if hull is None else hull
     taken = set(int(s) for s in start)
     cand = np.array([c for c in range(wedges.size) if c not in taken], dtype=np.intp)
     if k == 0:
         return [], h
     tol = LAZY_TOL * room.area
-    gains = _gains(h, wedges[cand])
+    gains = gain(h, cand)
     heap = [(-float(g), int(c), 0) for g, c in zip(gains, cand)]
     heapq.heapify(heap)
     chosen = []
@@ -127,7 +159,7 @@ def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
         while True:
             neg, c, stamp = heapq.heappop(heap)
             if stamp != rnd:
-                g = float(shapely.area(shapely.intersection(h, wedges[c])))
+                g = float(gain(h, c)[0])
                 heapq.heappush(heap, (-g, c, rnd))
                 continue
             # c is fresh and on top; every entry within tol of its gain must be fresh too
@@ -139,7 +171,7 @@ def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None):
                 if e[2] == rnd:
                     heapq.heappush(heap, e)
                 else:
-                    g = float(shapely.area(shapely.intersection(h, wedges[e[1]])))
+                    g = float(gain(h, e[1])[0])
                     heapq.heappush(heap, (-g, e[1], rnd))
             if not stale:
                 break
@@ -209,7 +241,7 @@ def greedy_remove(wedges, room: Polygon, current, m: int):
     return kept, removed, h
 
 
-def incremental_select(wedges, room: Polygon, current, m: int) -> list:
+def incremental_select(wedges, room: Polygon, current, m: int, cones=None) -> list:
     """Paper section 4.5: greedily remove m of the current cameras, then add m greedily.
 
     Returns
@@ -217,7 +249,7 @@ def incremental_select(wedges, room: Polygon, current, m: int) -> list:
     list of ints, sorted, the same size as ``current``.
     """
     kept, _, h = greedy_remove(wedges, room, current, m)
-    added, _ = lazy_greedy_select(wedges, room, m, start=kept, hull=h)
+    added, _ = lazy_greedy_select(wedges, room, m, start=kept, hull=h, cones=cones)
     return sorted(kept + added)
 
 
@@ -273,8 +305,8 @@ def choose_cameras(
     if current is not None:
         current = check_indices("current", current, n, size=k)
     # all geometry validation (yaw, fov, room, finite values) happens here
-    wedges = free_wedges_from_discs(camera_xy, camera_yaw, fov, estimates, radius, room,
-                                    strict=False)
+    wedges, cones = free_wedges_from_discs(camera_xy, camera_yaw, fov, estimates, radius,
+                                           room, strict=False, return_cones=True)
     if tasker == "clustering" and pair_axes(estimates).size:
         seed = 0 if rng is None else int(rng.integers(2**31 - 1))
         return clustering_select(camera_yaw, estimates, k, seed)
@@ -290,11 +322,11 @@ def choose_cameras(
             )
         return np.array(optimal_select(wedges, room, k), dtype=np.intp)
     if tasker == "incremental" and current is not None:
-        return np.array(incremental_select(wedges, room, current, m), dtype=np.intp)
+        return np.array(incremental_select(wedges, room, current, m, cones), dtype=np.intp)
     if tasker == "greedy":
-        chosen, _ = greedy_select(wedges, room, k)
+        chosen, _ = greedy_select(wedges, room, k, cones=cones)
     else:  # lazy_greedy, or incremental without a current set
-        chosen, _ = lazy_greedy_select(wedges, room, k)
+        chosen, _ = lazy_greedy_select(wedges, room, k, cones=cones)
     return np.sort(np.array(chosen, dtype=np.intp))
 
 
