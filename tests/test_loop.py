@@ -1,0 +1,144 @@
+"""The tasked network loop, `camtask run` and `camtask demo`."""
+
+import json
+
+import numpy as np
+import pytest
+
+from scene import load_scene
+from tasking import visual_hull_of_scanlines
+from testbed.cli import main
+from testbed.episode import walk, with_people
+from testbed.loop import LoopConfig, PrecomputedSource, run_loop, summarise
+
+
+def _disc_scanlines(scene, truth, bearings):
+    """Exact scanlines of discs: a column is occupied when any part of it sees a disc."""
+    xy, _, _ = scene.floor_poses()
+    r = scene.people.radius
+    out = np.zeros((len(truth), len(xy), bearings.shape[1]), bool)
+    for t, pos in enumerate(truth):
+        d = pos[None] - xy[:, None]                          # (n_cams, people, 2)
+        centre = np.arctan2(d[..., 1], d[..., 0])
+        half = np.arcsin(np.clip(r / np.linalg.norm(d, axis=-1), 0, 1))
+        diff = np.angle(np.exp(1j * (bearings[:, :, None] - centre[:, None, :])))
+        step = np.abs(np.gradient(bearings, axis=1))[:, :, None] / 2      # half a column
+        out[t] = (np.abs(diff) <= half[:, None, :] + step).any(axis=-1)
+    return out
+
+
+@pytest.fixture(scope="module")
+def lab_episode():
+    from pipeline.rectify import Rectifier
+
+    scene = load_scene("lab")
+    truth = walk(scene, 12, np.random.default_rng(5))
+    bearings = Rectifier.build(scene.cameras).bearings
+    return scene, truth, PrecomputedSource(_disc_scanlines(scene, truth, bearings), bearings)
+
+
+@pytest.mark.parametrize("tasker", ["uniform", "greedy", "lazy_greedy", "incremental", "clustering"])
+def test_loop_hull_contains_every_person_seen_by_a_tasked_camera(lab_episode, tasker):
+    import shapely
+
+    scene, truth, source = lab_episode
+    results = list(run_loop(scene, LoopConfig(tasker, 8), truth, source))
+    assert len(results) == len(truth)
+    for r in results:
+        assert len(r.tasked) == 8 and len(set(r.tasked)) == 8
+        assert r.bits_sent > 0 and r.hull_area > 0
+        union = shapely.union_all(r.polygons)
+        for p in r.truth:  # exact scanlines: the pruned hull still holds every person
+            disc = shapely.Point(p).buffer(scene.people.radius)
+            assert disc.difference(union).area < 1e-4 * disc.area
+    summary = summarise(results, scene)
+    assert summary["frames"] == len(truth) and summary["residual"] > 0
+    assert 0 <= summary["tracking"]["idf1"] <= 1
+
+
+def test_greedy_beats_uniform_on_average(lab_episode):
+    scene, truth, source = lab_episode
+    mean = {t: np.mean([r.hull_area for r in run_loop(scene, LoopConfig(t, 6), truth, source)])
+            for t in ("uniform", "greedy")}
+    assert mean["greedy"] <= mean["uniform"]
+
+
+def test_incremental_swaps_m_cameras_per_update(lab_episode):
+    scene, truth, source = lab_episode
+    results = list(run_loop(scene, LoopConfig("incremental", 6, m=1, update_every=3), truth, source))
+    for a, b in zip(results, results[1:]):
+        changed = len(set(b.tasked) - set(a.tasked))
+        assert changed <= 1
+        if b.index % 3 != 0:
+            assert changed == 0
+
+
+def test_bad_loop_arguments(lab_episode):
+    scene, truth, source = lab_episode
+    with pytest.raises(ValueError, match="k: expected at most 16 cameras"):
+        next(run_loop(scene, LoopConfig("greedy", 17), truth, source))
+    with pytest.raises(ValueError, match=r"tasker.*uniform.*'best'|tasker.*'best'.*uniform"):
+        next(run_loop(scene, LoopConfig("best", 4), truth, source))
+    with pytest.raises(ValueError, match="m: expected at most k = 2"):
+        next(run_loop(scene, LoopConfig("incremental", 2, m=3), truth, source))
+    xy, _, _ = scene.floor_poses()
+    with pytest.raises(ValueError, match="scanlines"):
+        visual_hull_of_scanlines(xy[:2], source.all[0, :2, :600] * 0 + 0.1, np.zeros((2, 640), bool),
+                                 scene.room.polygon)
+
+
+def test_people_validation():
+    lab = load_scene("lab")
+    with pytest.raises(ValueError, match="--people: 400 people of radius 0.25 m do not fit"):
+        with_people(lab, 400)
+    with pytest.raises(ValueError, match="--people: expected a number >= 0"):
+        with_people(lab, -1)
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["--k", "20"], "k: expected at most 16 cameras"),
+    (["--tasker", "best"], "'best'"),
+    (["--people", "0"], "--people: expected at least 1 person"),
+    (["--people", "500"], "do not fit in the room"),
+    (["--frames", "0"], "--frames: expected a number >= 1"),
+])
+def test_run_bad_input_is_one_line(capsys, argv, match):
+    assert main(["run", "lab", *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and match in err[0]
+
+
+def test_run_refuses_the_circle_scene(capsys):
+    assert main(["run", "circle"]) == 2
+    assert "floor-plane cameras only" in capsys.readouterr().err
+
+
+@pytest.mark.render
+def test_run_end_to_end_json_and_video(tmp_path, capsys):
+    video = tmp_path / "run.mp4"
+    assert main(["run", "lab", "--frames", "4", "--k", "6", "--seed", "2", "--json", "--video", str(video)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert len(doc["frames"]) == 4
+    f = doc["frames"][0]
+    assert len(f["tasked"]) == 6 and f["bits_sent"] > 0 and len(f["truth"]) == 3
+    assert {"hull_area", "residual", "estimates", "tracks"} <= set(f)
+    assert {"residual", "bits_per_frame", "tracking"} <= set(doc["summary"])
+    assert video.stat().st_size > 1000
+    assert not list(tmp_path.glob(".*partial*"))
+
+
+@pytest.mark.render
+def test_interrupted_run_leaves_no_video(tmp_path, monkeypatch):
+    import testbed.loop as loop
+
+    real, calls = loop.visual_hull_of_scanlines, []
+
+    def interrupt_third_frame(*a, **k):   # Ctrl-C after two frames went into the video
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+    monkeypatch.setattr(loop, "visual_hull_of_scanlines", interrupt_third_frame)
+    video = tmp_path / "run.mp4"
+    assert main(["run", "lab", "--frames", "3", "--video", str(video)]) == 130
+    assert list(tmp_path.iterdir()) == []
