@@ -4,12 +4,12 @@ Every public function of :mod:`tasking` converts and checks its inputs with thes
 helpers, which raise a one-line ``ValueError`` naming the parameter and what was
 expected. Nothing here uses ``assert``.
 
->>> check_choice("tasker", "greedy", ("uniform", "greedy"))
-'greedy'
+String choices go through the project's one helper, :func:`scene.checks.check_choice`:
+
 >>> check_choice("tasker", "best", ("uniform", "greedy"))
 Traceback (most recent call last):
     ...
-ValueError: tasker must be one of 'uniform', 'greedy'; got 'best'
+ValueError: tasker: unknown value 'best'; expected one of uniform, greedy
 """
 
 from __future__ import annotations
@@ -20,6 +20,8 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 from shapely.geometry.base import BaseGeometry
+
+from scene.checks import check_choice  # noqa: F401  (re-exported: the one helper for choices)
 
 __all__ = [
     "check_choice",
@@ -34,14 +36,6 @@ __all__ = [
     "check_discs_in_room",
     "check_cameras_outside_discs",
 ]
-
-
-def check_choice(name: str, value: str, valid: Sequence[str]) -> str:
-    """Return ``value`` if it is one of ``valid``, else raise listing the valid values."""
-    if not isinstance(value, str) or value not in valid:
-        listed = ", ".join(repr(v) for v in valid)
-        raise ValueError(f"{name} must be one of {listed}; got {value!r}")
-    return value
 
 
 def check_points(name: str, points, *, allow_empty: bool = False) -> np.ndarray:

@@ -220,7 +220,7 @@ EST = np.array([[0.2, 0.0], [-0.3, 0.1]])
 @pytest.mark.parametrize(
     "tasker, k, kwargs, match",
     [
-        ("best", 2, {}, "tasker must be one of 'uniform', 'clustering', 'optimal'"),
+        ("best", 2, {}, "tasker: unknown value 'best'; expected one of uniform, clustering, optimal"),
         ("greedy", 7, {}, "k must be >= 1 and <= 6"),
         ("greedy", 0, {}, "k must be >= 1"),
         ("incremental", 2, {"m": 3}, "m must be >= 1 and <= 2"),
