@@ -38,6 +38,9 @@ class DistortionMaps:
     fixed : the same map converted by ``cv2.convertMaps`` for fast bilinear remapping
     nearest : the map rounded to whole pixels (CV_16SC2), for label images
     identity : True when there is no distortion (remapping is skipped)
+    block_lo, block_hi : (ceil(H / BLOCK), ceil(W / BLOCK), 2) float32, the smallest and
+        largest canvas (u, v) of each BLOCK x BLOCK tile of output pixels (for
+        :func:`affected_regions`)
     """
 
     canvas_size: tuple[int, int]
@@ -46,6 +49,8 @@ class DistortionMaps:
     fixed: tuple
     nearest: np.ndarray | None
     identity: bool
+    block_lo: np.ndarray = None
+    block_hi: np.ndarray = None
 
     def canvas_K(self, K) -> np.ndarray:
         """The ideal canvas's camera matrix, (3, 3) pixels."""
@@ -66,13 +71,25 @@ def ideal_pixels(K, dist, width: int, height: int) -> np.ndarray:
     return ideal.reshape(height, width, 2)
 
 
+#: Output tile size (pixels) of the coarse map bounds used to find affected regions.
+BLOCK = 16
+
+
+def _block_bounds(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    rows = np.arange(0, xy.shape[0], BLOCK)
+    cols = np.arange(0, xy.shape[1], BLOCK)
+    lo = np.minimum.reduceat(np.minimum.reduceat(xy, rows, axis=0), cols, axis=1)
+    hi = np.maximum.reduceat(np.maximum.reduceat(xy, rows, axis=0), cols, axis=1)
+    return lo, hi
+
+
 def distortion_maps(K, dist, width: int, height: int, margin: int = 2) -> DistortionMaps:
     """Maps that turn an ideal canvas render into the distorted ``width`` x ``height`` image."""
     dist = check_array("dist", dist, (5,))
     if not np.any(dist):
         v, u = np.mgrid[0:height, 0:width].astype(np.float32)
         xy = np.stack([u, v], axis=-1)
-        return DistortionMaps((width, height), (0, 0), xy, (None, None), None, True)
+        return DistortionMaps((width, height), (0, 0), xy, (None, None), None, True, *_block_bounds(xy))
     ideal = ideal_pixels(K, dist, width, height)
     lo = np.floor(ideal.reshape(-1, 2).min(axis=0)) - margin
     hi = np.ceil(ideal.reshape(-1, 2).max(axis=0)) + margin
@@ -82,7 +99,55 @@ def distortion_maps(K, dist, width: int, height: int, margin: int = 2) -> Distor
     xy = (ideal + np.array([du, dv])).astype(np.float32)
     fixed = cv2.convertMaps(xy[..., 0], xy[..., 1], cv2.CV_16SC2)
     nearest = cv2.convertMaps(xy[..., 0], xy[..., 1], cv2.CV_16SC2, nninterpolation=True)[0]
-    return DistortionMaps(canvas, (du, dv), xy, fixed, nearest, False)
+    return DistortionMaps(canvas, (du, dv), xy, fixed, nearest, False, *_block_bounds(xy))
+
+
+def affected_regions(maps: DistortionMaps, rects: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """Output regions that can change when the canvas changes inside ``rects``.
+
+    rects : (k, 4) float, canvas pixel bounds (x0, y0, x1, y1), inclusive; +-inf for
+        "beyond the canvas edge"
+    Returns one ``(r0, r1, c0, c1)`` output slice per rect that touches the image (none
+    for the others): every output pixel whose bilinear (or nearest) source pixels meet
+    the rect lies inside. Conservative: whole BLOCK x BLOCK tiles.
+    """
+    rects = np.asarray(rects, float).reshape(-1, 4)
+    if not len(rects):
+        return []
+    lo, hi = maps.block_lo, maps.block_hi
+    H, W = maps.map_xy.shape[:2]
+    # bilinear reads canvas pixels floor(m) and floor(m) + 1: affected iff x0 - 1 <= m < x1 + 1;
+    # fixed-point maps are rounded to 1/32 px, so allow half a pixel more
+    x0, y0, x1, y1 = (rects[:, i, None, None] for i in range(4))
+    hit = ((hi[..., 0] >= x0 - 1.5) & (lo[..., 0] <= x1 + 1.5)
+           & (hi[..., 1] >= y0 - 1.5) & (lo[..., 1] <= y1 + 1.5))
+    rows, cols = hit.any(axis=2), hit.any(axis=1)
+    out = []
+    for r, c in zip(rows, cols):
+        if not r.any():
+            continue
+        rr, cc = np.flatnonzero(r), np.flatnonzero(c)
+        out.append((int(rr[0]) * BLOCK, min(H, (int(rr[-1]) + 1) * BLOCK),
+                    int(cc[0]) * BLOCK, min(W, (int(cc[-1]) + 1) * BLOCK)))
+    return out
+
+
+def distort_region(canvas: np.ndarray, maps: DistortionMaps, region, out: np.ndarray,
+                   nearest: bool = False) -> np.ndarray:
+    """:func:`distort` of output pixels ``region = (r0, r1, c0, c1)`` only, into ``out``.
+
+    Bit-identical to the same pixels of the whole-image :func:`distort` (each output
+    pixel depends only on its own map entry).
+    """
+    r0, r1, c0, c1 = region
+    if maps.identity:
+        out[...] = canvas[r0:r1, c0:c1]
+        return out
+    if nearest:
+        return cv2.remap(canvas, maps.nearest[r0:r1, c0:c1], None, cv2.INTER_NEAREST, dst=out,
+                         borderMode=cv2.BORDER_REPLICATE)
+    return cv2.remap(canvas, maps.fixed[0][r0:r1, c0:c1], maps.fixed[1][r0:r1, c0:c1], cv2.INTER_LINEAR,
+                     dst=out, borderMode=cv2.BORDER_REPLICATE)
 
 
 def distort(canvas: np.ndarray, maps: DistortionMaps, out: np.ndarray | None = None,

@@ -1,54 +1,97 @@
 """Sensor degradation: per-frame illumination gain and Gaussian sensor noise.
 
 Both are drawn from an ``np.random.Generator`` in a fixed order (one gain per camera,
-then the noise), so the same seed gives the same bytes. The noise is Gaussian rounded
-to whole grey levels, drawn by inverse-CDF lookup from one random byte per sample: the
-byte k selects the quantile ``(k + 0.5) / 256`` of N(0, noise_std), rounded. That is
-the rounded Gaussian up to the 1/256 quantisation of its tails (|z| <= 2.9 sigma), at
-the cost of one random byte and one table lookup per sample.
+then one pool offset per camera), so the same seed gives the same bytes.
 
->>> lut = noise_table(2.0)
->>> int(lut[128]) - BIAS, int(lut.min()) - BIAS, int(lut.max()) - BIAS
-(0, -6, 6)
+The noise is Gaussian rounded to whole grey levels, but it is not drawn afresh per
+frame: each camera's frame takes a contiguous window of one fixed **noise pool**, a
+few megabytes of independent rounded N(0, noise_std) samples (clipped to -128..127)
+drawn once from a constant seed, starting at an offset drawn from ``rng``. Drawing
+one offset instead of H x W x 3 random numbers makes the noise nearly free (one
+saturating ``cv2.addWeighted`` pass that also applies the gain). What this
+approximates, honestly:
+
+- within one frame every sample is an independent rounded Gaussian (exact);
+- at a fixed pixel the samples of successive frames are independent unless two
+  windows start at the same offset (probability ``1 / POOL_EXTRA`` per pair);
+- two windows that overlap share samples, shifted: one camera's noise can be a
+  translated copy of part of another frame's. Per-pixel statistics cannot tell;
+  cross-correlating two frames at exactly that lag could;
+- the pool is the same for every seed; seeds change the offsets (and the gains).
+
+>>> pool = noise_pool(2.0, 1000)          # rounding adds 1/12 to the variance
+>>> pool.dtype, len(pool) == 1000 + POOL_EXTRA, round(float(pool[:10**6].std()), 2)
+(dtype('uint8'), True, 2.02)
 """
 
 from __future__ import annotations
 
-from statistics import NormalDist
+from functools import lru_cache
 
 import cv2
 import numpy as np
 
-#: Offset added to the signed noise so that it fits a uint8 lookup table.
+#: Offset added to the signed noise so that it fits in uint8.
 BIAS = 128
 
+#: How many distinct window offsets the pool offers (the pool holds one frame more).
+POOL_EXTRA = 1 << 23
 
-def noise_table(noise_std: float) -> np.ndarray:
-    """(256,) uint8 table: random byte -> rounded Gaussian noise + :data:`BIAS`."""
-    q = (np.arange(256) + 0.5) / 256.0
-    z = np.array([NormalDist().inv_cdf(x) for x in q])
-    return np.clip(np.rint(noise_std * z) + BIAS, 0, 255).astype(np.uint8)
+#: The pool's fixed seed: the pool is part of the renderer, like the room's texture.
+POOL_SEED = 20240611
+
+
+@lru_cache(maxsize=4)
+def noise_pool(noise_std: float, frame_size: int) -> np.ndarray:
+    """(frame_size + POOL_EXTRA,) uint8: rounded N(0, noise_std) + :data:`BIAS`, clipped, read-only."""
+    rng = np.random.default_rng(POOL_SEED)
+    pool = np.empty(frame_size + POOL_EXTRA, np.uint8)
+    chunk = 1 << 21
+    for start in range(0, len(pool), chunk):
+        z = rng.standard_normal(min(chunk, len(pool) - start), dtype=np.float32)
+        pool[start:start + len(z)] = np.clip(np.rint(z * np.float32(noise_std)) + BIAS, 0, 255)
+    pool.flags.writeable = False
+    return pool
+
+
+def draw_gains_offsets(n: int, gain_jitter: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Per-camera gains ``max(0, 1 + N(0, gain_jitter))`` and pool offsets, drawn in that order."""
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng: expected an np.random.Generator, got {type(rng).__name__}")
+    gains = np.clip(1.0 + gain_jitter * rng.standard_normal(n), 0.0, None)
+    offsets = rng.integers(0, POOL_EXTRA, n, endpoint=True)
+    return gains, offsets
+
+
+def sense(dst: np.ndarray, src: np.ndarray, gain: float, noise: np.ndarray | None) -> None:
+    """``dst = saturate(round(src * gain) + noise - BIAS)``, one pass, on 2-D uint8 views.
+
+    dst, src, noise : (rows, cols) uint8 of one shape (``src`` may be ``dst``); noise is
+    biased by :data:`BIAS` (a pool window), or None for no noise
+    """
+    if noise is not None:
+        cv2.addWeighted(src, float(gain), noise, 1.0, -BIAS, dst=dst)
+    elif gain != 1.0:
+        cv2.convertScaleAbs(src, dst=dst, alpha=float(gain))
+    elif dst is not src:
+        np.copyto(dst, src)
 
 
 def degrade(rgb: np.ndarray, noise_std: float, gain_jitter: float, rng: np.random.Generator,
-            table: np.ndarray | None = None) -> np.ndarray:
+            pool: np.ndarray | None = None) -> np.ndarray:
     """Multiply each camera by a random gain ``1 + N(0, gain_jitter)`` and add noise, in place.
 
     rgb : (n_cams, H, W, 3) uint8, modified in place and returned
     noise_std : grey levels; gain_jitter : relative std of the per-camera gain
+    pool : :func:`noise_pool` ``(noise_std, H * W * 3)`` (built and cached when None)
     """
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError(f"rng: expected an np.random.Generator, got {type(rng).__name__}")
-    n = rgb.shape[0]
-    gains = np.clip(1.0 + gain_jitter * rng.standard_normal(n), 0.0, None)
-    if noise_std > 0:
-        table = noise_table(noise_std) if table is None else table
-        codes = np.frombuffer(rng.bytes(rgb.size), np.uint8).reshape(n, -1)
-        noise = cv2.LUT(codes, table)
+    n, H = rgb.shape[:2]
+    gains, offsets = draw_gains_offsets(n, gain_jitter, rng)
+    size = rgb[0].size
+    if noise_std > 0 and pool is None:
+        pool = noise_pool(float(noise_std), size)
     for i in range(n):
-        flat = rgb[i].reshape(rgb.shape[1], -1)
-        if noise_std > 0:
-            cv2.addWeighted(flat, float(gains[i]), noise[i].reshape(flat.shape), 1.0, -BIAS, dst=flat)
-        elif gains[i] != 1.0:
-            cv2.convertScaleAbs(flat, dst=flat, alpha=float(gains[i]))
+        flat = rgb[i].reshape(H, -1)
+        noise = pool[offsets[i]:offsets[i] + size].reshape(flat.shape) if noise_std > 0 else None
+        sense(flat, flat, gains[i], noise)
     return rgb

@@ -118,18 +118,29 @@ class Rasteriser:
             raise RuntimeError(f"OpenGL framebuffer incomplete (status 0x{int(status):x})")
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
 
-    def draw(self, view_projs: np.ndarray, offsets_xy: np.ndarray, read: bool = True) -> np.ndarray:
+    def draw(self, view_projs: np.ndarray, offsets_xy: np.ndarray, read: bool = True,
+             bands=None) -> np.ndarray:
         """Draw every camera's ideal canvas and (with ``read``) read the pixels back.
 
         view_projs : (n, 4, 4) float, projection @ view per camera, n <= n_tiles
         offsets_xy : (n_people, 2) float, metres, world frame (NaN rows: hidden)
-        Returns (n, H, W, 4) uint8, rows top first: RGB and the label in alpha. The array
-        is reused by the next call: copy what you keep.
+        bands : (n,) distinct ints in [0, n_tiles), the framebuffer band each camera is
+            drawn in (default 0..n-1); only those bands are cleared and read. A camera
+            always drawn in the same band gives bit-identical pixels wherever the scene
+            is the same (the renderer relies on it to reuse its cached background).
+        Returns (n, H, W, 4) uint8, rows top first: RGB and the label in alpha. Band b is
+        read into ``self.pixels[b]`` (the result is a view of it when the bands are
+        consecutive): it is reused by the next call that reads band b, copy what you keep.
         """
         GL = self.GL
         n = len(view_projs)
         if not 1 <= n <= self.n_tiles:
             raise ValueError(f"view_projs: expected 1..{self.n_tiles} cameras, got {n}")
+        bands = np.arange(n) if bands is None else np.asarray(bands, int).reshape(-1)
+        if len(bands) != n or len(set(bands.tolist())) != n or bands.min() < 0 or bands.max() >= self.n_tiles:
+            raise ValueError(f"bands: expected {n} distinct band numbers in 0..{self.n_tiles - 1}, got {bands}")
+        b0 = int(bands[0])
+        consecutive = np.array_equal(bands, np.arange(b0, b0 + n))
         gl.context(self.backend)
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
         GL.glUseProgram(self.program)
@@ -145,12 +156,20 @@ class Rasteriser:
             off = np.asarray(offsets_xy, np.float32).reshape(self.n_people, 2).copy()
             off[~np.isfinite(off).all(axis=1)] = HIDDEN
             GL.glUniform2fv(self._u_offsets, self.n_people, off)
-        GL.glViewport(0, 0, self.width, self.height * n)
         GL.glClearColor(0.0, 0.0, 0.0, 0.0)
-        GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
+        if consecutive and n == self.n_tiles:
+            GL.glDisable(GL.GL_SCISSOR_TEST)
+            GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
+        else:                                       # clear only the bands drawn now
+            GL.glEnable(GL.GL_SCISSOR_TEST)
+            runs = [(b0, n)] if consecutive else [(int(b), 1) for b in bands]
+            for start, count in runs:
+                GL.glScissor(0, start * self.height, self.width, count * self.height)
+                GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
+            GL.glDisable(GL.GL_SCISSOR_TEST)
         vp = np.ascontiguousarray(view_projs, np.float32)
         for i in range(n):
-            GL.glViewport(0, i * self.height, self.width, self.height)
+            GL.glViewport(0, int(bands[i]) * self.height, self.width, self.height)
             GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, vp[i])
             GL.glDrawArrays(GL.GL_TRIANGLES, 0, self.n_vertices)
         if not read:
@@ -158,8 +177,15 @@ class Rasteriser:
             return None
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
-        out = self.pixels[:n]
-        GL.glReadPixels(0, 0, self.width, self.height * n, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE, out)
+        if consecutive:                             # one read for all cameras
+            out = self.pixels[b0:b0 + n]
+            GL.glReadPixels(0, b0 * self.height, self.width, self.height * n, GL.GL_RGBA,
+                            GL.GL_UNSIGNED_BYTE, out)
+        else:
+            for b in bands:
+                GL.glReadPixels(0, int(b) * self.height, self.width, self.height, GL.GL_RGBA,
+                                GL.GL_UNSIGNED_BYTE, self.pixels[b])
+            out = self.pixels[bands]
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
         return out
 

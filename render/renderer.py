@@ -17,9 +17,9 @@ import numpy as np
 
 from scene.config import Scene
 
-from .distortion import DistortionMaps, distort, distortion_maps
+from .distortion import DistortionMaps, affected_regions, distort, distort_region, distortion_maps
 from .geometry import Lighting, Mesh, people_mesh, room_mesh
-from .noise import degrade, noise_table
+from .noise import draw_gains_offsets, noise_pool, sense
 from .pose import projection_matrix, view_matrix
 from .raster import Rasteriser
 
@@ -95,11 +95,23 @@ class Renderer:
         self.view_projs = np.stack([
             projection_matrix(m.canvas_K(c.K), cw, ch, ZNEAR, ZFAR, flip_rows=True) @ view_matrix(c.R, c.t)
             for c, m in zip(self.cameras, (self.maps[i] for i in self.map_index))])
+        self.canvas_size = (cw, ch)
         people = scene.people
-        mesh = Mesh.concatenate([room_mesh(scene.room, lighting), people_mesh(people, lighting)])
+        people_m = people_mesh(people, lighting)
+        mesh = Mesh.concatenate([room_mesh(scene.room, lighting), people_m])
         self.raster = Rasteriser(mesh, people.count, cw, ch, len(self.cameras), scene.render.backend)
         self.backend = self.raster.backend
-        self._table = noise_table(scene.render.noise_std)
+        # for the regions people can touch: each person's vertices (at the origin) and
+        # each camera's ideal canvas projection (OpenCV convention, pixel centres integer)
+        self._people_pts = [np.unique(people_m.positions[people_m.person == p], axis=0).astype(float)
+                            for p in range(people.count)]
+        self._Kc = np.stack([m.canvas_K(c.K) for c, m in
+                             zip(self.cameras, (self.maps[i] for i in self.map_index))])
+        self._R = np.stack([np.asarray(c.R, float) for c in self.cameras])
+        self._t = np.stack([np.asarray(c.t, float).reshape(3) for c in self.cameras])
+        self._rgba = np.empty((self.height, self.width, 4), np.uint8)   # scratch
+        self._alpha = np.zeros((ch, cw), np.uint8)                      # idem, kept all 0
+        self._pool = None
         self._background = None
 
     # -- context manager -------------------------------------------------------------
@@ -135,12 +147,103 @@ class Renderer:
         if not clean and rng is None:
             raise ValueError("rng: expected an np.random.Generator (or clean=True for noise-free frames)")
         idx = self._indices(cameras)
-        canvases = self.raster.draw(self.view_projs[idx], pos)
-        rgb, labels = self._distort(canvases, idx)
+        background = self._background_frames()
+        n, H, W = len(idx), self.height, self.width
+        s = self.scene.render
+        gains = offsets = None
+        pool = None
         if not clean:
-            s = self.scene.render
-            degrade(rgb, s.noise_std, s.gain_jitter, rng, self._table)
+            gains, offsets = draw_gains_offsets(n, s.gain_jitter, rng)
+            if s.noise_std > 0:
+                pool = self._noise_pool()
+        rects = self._rects(idx, pos)
+        rgb = np.empty((n, H, W, 3), np.uint8)
+        labels = np.zeros((n, H, W), np.uint8)
+
+        canvases = self.raster.draw(self.view_projs[idx], pos, bands=idx)
+        for k, i in enumerate(idx):
+            noise = None if pool is None else pool[offsets[k]:offsets[k] + H * W * 3].reshape(H, W * 3)
+            self._finish(int(i), canvases[k], rects[k], background.rgb[i], rgb[k], labels[k],
+                         None if clean else gains[k], noise)
         return Frames(rgb, labels, tuple(self.numbers[i] for i in idx))
+
+    def _finish(self, i: int, canvas: np.ndarray, rects: list, background: np.ndarray, rgb: np.ndarray,
+                labels: np.ndarray, gain: float | None, noise: np.ndarray | None) -> None:
+        """Camera ``i``'s distorted frame and labels from its canvas, into ``rgb`` and ``labels``.
+
+        Outside the regions the people can reach the frame is the cached background, bit
+        for bit (same draw, same band); inside, the canvas is remapped. Then the gain and
+        the noise (``gain`` None: clean) over the whole frame, in one pass.
+        """
+        m = self.maps[self.map_index[i]]
+        H, W = self.height, self.width
+        np.copyto(rgb, background)
+        if rects:
+            alpha = self._alpha
+            box = _union(rects, self.canvas_size)
+            x0, y0, x1, y1 = box
+            cv2.extractChannel(canvas[y0:y1, x0:x1], 3, dst=alpha[y0:y1, x0:x1])
+            for r0, r1, c0, c1 in affected_regions(m, rects):
+                rgba = self._rgba[:r1 - r0, :c1 - c0]
+                distort_region(canvas, m, (r0, r1, c0, c1), rgba)
+                cv2.cvtColor(rgba, cv2.COLOR_RGBA2RGB, dst=rgb[r0:r1, c0:c1])
+                distort_region(alpha, m, (r0, r1, c0, c1), labels[r0:r1, c0:c1], nearest=True)
+            alpha[y0:y1, x0:x1] = 0                 # outside the rects the canvas alpha is 0
+        if gain is not None:
+            flat = rgb.reshape(H, W * 3)
+            sense(flat, flat, gain, noise)
+
+    def _noise_pool(self) -> np.ndarray:
+        if self._pool is None:
+            self._pool = noise_pool(float(self.scene.render.noise_std), self.height * self.width * 3)
+        return self._pool
+
+    def _rects(self, idx: np.ndarray, pos: np.ndarray) -> list[list[tuple[float, float, float, float]]]:
+        """Per camera, canvas boxes (x0, y0, x1, y1) holding every pixel a visible person covers.
+
+        Each person's vertices are projected on the ideal canvas (exact pinhole, the
+        matrices the rasteriser uses, OpenCV pixel convention); the pixels a person
+        covers lie inside the box of its projected vertices, widened by 2 px for
+        rasterisation. A person straddling the near plane gets the whole canvas, one
+        wholly behind it none; a side on the canvas edge extends to infinity.
+        """
+        cw, ch = self.canvas_size
+        rects = [[] for _ in idx]
+        for p, pts in enumerate(self._people_pts):
+            if not np.isfinite(pos[p]).all():
+                continue
+            world = pts + np.array([pos[p, 0], pos[p, 1], 0.0])
+            cam = np.einsum("nij,mj->nmi", self._R[idx], world) + self._t[idx][:, None, :]
+            z = cam[..., 2]
+            uvw = np.einsum("nij,nmj->nmi", self._Kc[idx], cam)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                uv = uvw[..., :2] / z[..., None]
+            front = (z > 1.001 * ZNEAR).all(axis=1)
+            behind = (z < 0.999 * ZNEAR).all(axis=1)
+            lo = np.floor(uv.min(axis=1)) - 2
+            hi = np.ceil(uv.max(axis=1)) + 2
+            for k in range(len(idx)):
+                if behind[k]:
+                    continue                            # clipped away entirely
+                if not front[k]:
+                    rects[k].append((-np.inf, -np.inf, np.inf, np.inf))
+                    continue
+                (x0, y0), (x1, y1) = lo[k], hi[k]
+                if x1 < 0 or y1 < 0 or x0 > cw - 1 or y0 > ch - 1:
+                    continue                            # off the canvas
+                rects[k].append((-np.inf if x0 <= 0 else x0, -np.inf if y0 <= 0 else y0,
+                                 np.inf if x1 >= cw - 1 else x1, np.inf if y1 >= ch - 1 else y1))
+        return rects
+
+    def _background_frames(self) -> Frames:
+        """The empty room for every prepared camera, clean; drawn and distorted once."""
+        if self._background is None:
+            hidden = np.full((self.scene.people.count, 2), np.nan)
+            all_idx = np.arange(len(self.numbers))
+            canvases = self.raster.draw(self.view_projs, hidden, bands=all_idx)
+            rgb, labels = self._distort(canvases, all_idx)
+            self._background = Frames(rgb, labels, self.numbers)
+        return self._background
 
     def background(self, cameras=None) -> Frames:
         """The empty room, clean (no gain, no noise), distorted; labels are all 0.
@@ -148,15 +251,16 @@ class Renderer:
         This is what a background model converges to; add noise with
         :func:`render.noise.degrade` for a noisy empty frame.
         """
-        if self._background is None:
-            hidden = np.full((self.scene.people.count, 2), np.nan)
-            self._background = self.render(hidden, clean=True)
+        bg = self._background_frames()
         idx = self._indices(cameras)
-        return Frames(self._background.rgb[idx].copy(), self._background.labels[idx].copy(),
-                      tuple(self.numbers[i] for i in idx))
+        return Frames(bg.rgb[idx].copy(), bg.labels[idx].copy(), tuple(self.numbers[i] for i in idx))
 
     def _distort(self, canvases: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Distorted RGB (n, H, W, 3) and labels (n, H, W) from RGBA canvases (n, Hc, Wc, 4)."""
+        """Distorted RGB (n, H, W, 3) and labels (n, H, W) from RGBA canvases (n, Hc, Wc, 4).
+
+        The whole-image path: used for the cached background, and by the tests as the
+        reference the per-region production path must match bit for bit.
+        """
         n, H, W = len(idx), self.height, self.width
         rgb = np.empty((n, H, W, 3), np.uint8)
         labels = np.empty((n, H, W), np.uint8)
@@ -169,6 +273,15 @@ class Renderer:
             cv2.extractChannel(canvases[k], 3, dst=alpha)
             distort(alpha, m, out=labels[k], nearest=True)
         return rgb, labels
+
+
+def _union(rects, canvas_size) -> tuple[int, int, int, int]:
+    """Integer canvas slice bounds (x0, y0, x1, y1), end exclusive, of the union of ``rects``."""
+    cw, ch = canvas_size
+    r = np.asarray(rects, float)
+    x0, y0 = np.clip(r[:, :2].min(axis=0), 0, [cw, ch])
+    x1, y1 = np.clip(r[:, 2:].max(axis=0) + 1, 0, [cw, ch])
+    return int(x0), int(y0), int(x1), int(y1)
 
 
 def _maps(cameras) -> tuple[list[DistortionMaps], np.ndarray]:
