@@ -66,8 +66,8 @@ class PipelineParams:
     """
 
     threshold_deg: float = 5.5
-    brightness_floor: float = 60.0
-    dark_delta: float = 75.0
+    brightness_floor: float = 25.0
+    dark_delta: float = 40.0
     opening_kernel: int = 5
     spatial_kernel: int = 1
     temporal_alpha: float = 0.9
