@@ -81,7 +81,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
         warnings.simplefilter("ignore", UserWarning)
         cluster = LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-            silence_logs=logging.ERROR,
+            silence_logs=logging.CRITICAL,
         )
     client = Client(cluster)
     try:
