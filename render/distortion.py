@@ -111,24 +111,36 @@ def affected_regions(maps: DistortionMaps, rects: np.ndarray) -> list[tuple[int,
     for the others): every output pixel whose bilinear (or nearest) source pixels meet
     the rect lies inside. Conservative: whole BLOCK x BLOCK tiles.
     """
-    rects = np.asarray(rects, float).reshape(-1, 4)
-    if not len(rects):
-        return []
-    lo, hi = maps.block_lo, maps.block_hi
-    H, W = maps.map_xy.shape[:2]
+    rects = np.asarray(rects, float).reshape(1, -1, 4)
+    return regions_of(maps.block_lo[None], maps.block_hi[None], rects, maps.map_xy.shape[:2])[0]
+
+
+def regions_of(block_lo: np.ndarray, block_hi: np.ndarray, rects: np.ndarray,
+               size: tuple[int, int]) -> list[list[tuple[int, int, int, int]]]:
+    """:func:`affected_regions` for n cameras at once.
+
+    block_lo, block_hi : (n, nby, nbx, 2) each camera's map bounds per tile
+    rects : (n, k, 4) canvas boxes per camera (NaN rows: none)
+    size : (H, W) of the output images
+    """
+    H, W = size
+    if not rects.shape[1]:
+        return [[] for _ in range(len(rects))]
     # bilinear reads canvas pixels floor(m) and floor(m) + 1: affected iff x0 - 1 <= m < x1 + 1;
     # fixed-point maps are rounded to 1/32 px, so allow half a pixel more
-    x0, y0, x1, y1 = (rects[:, i, None, None] for i in range(4))
-    hit = ((hi[..., 0] >= x0 - 1.5) & (lo[..., 0] <= x1 + 1.5)
-           & (hi[..., 1] >= y0 - 1.5) & (lo[..., 1] <= y1 + 1.5))
-    rows, cols = hit.any(axis=2), hit.any(axis=1)
-    out = []
-    for r, c in zip(rows, cols):
-        if not r.any():
-            continue
-        rr, cc = np.flatnonzero(r), np.flatnonzero(c)
-        out.append((int(rr[0]) * BLOCK, min(H, (int(rr[-1]) + 1) * BLOCK),
-                    int(cc[0]) * BLOCK, min(W, (int(cc[-1]) + 1) * BLOCK)))
+    x0, y0, x1, y1 = (rects[:, :, i, None, None] for i in range(4))
+    lo, hi = block_lo[:, None], block_hi[:, None]
+    with np.errstate(invalid="ignore"):
+        hit = ((hi[..., 0] >= x0 - 1.5) & (lo[..., 0] <= x1 + 1.5)
+               & (hi[..., 1] >= y0 - 1.5) & (lo[..., 1] <= y1 + 1.5))
+    rows, cols = hit.any(axis=3), hit.any(axis=2)               # (n, k, nby), (n, k, nbx)
+    r_first, r_last = rows.argmax(axis=2), rows.shape[2] - 1 - rows[..., ::-1].argmax(axis=2)
+    c_first, c_last = cols.argmax(axis=2), cols.shape[2] - 1 - cols[..., ::-1].argmax(axis=2)
+    valid = rows.any(axis=2)
+    out = [[] for _ in range(len(rects))]
+    for k, j in zip(*np.nonzero(valid)):
+        out[k].append((int(r_first[k, j]) * BLOCK, min(H, (int(r_last[k, j]) + 1) * BLOCK),
+                       int(c_first[k, j]) * BLOCK, min(W, (int(c_last[k, j]) + 1) * BLOCK)))
     return out
 
 

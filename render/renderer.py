@@ -17,7 +17,7 @@ import numpy as np
 
 from scene.config import Scene
 
-from .distortion import DistortionMaps, affected_regions, distort, distort_region, distortion_maps
+from .distortion import DistortionMaps, distort, distort_region, distortion_maps, regions_of
 from .geometry import Lighting, Mesh, people_mesh, room_mesh
 from .noise import draw_gains_offsets, noise_pool, sense
 from .pose import projection_matrix, view_matrix
@@ -103,8 +103,14 @@ class Renderer:
         self.backend = self.raster.backend
         # for the regions people can touch: each person's vertices (at the origin) and
         # each camera's ideal canvas projection (OpenCV convention, pixel centres integer)
-        self._people_pts = [np.unique(people_m.positions[people_m.person == p], axis=0).astype(float)
-                            for p in range(people.count)]
+        pts = [np.unique(people_m.positions[people_m.person == p], axis=0).astype(float)
+               for p in range(people.count)]
+        m_max = max((len(p) for p in pts), default=1)
+        self._people_pts = np.stack([np.concatenate([p, np.repeat(p[:1], m_max - len(p), 0)]) for p in pts]) \
+            if pts else np.zeros((0, 1, 3))                            # (people, m, 3), padded
+        cam_maps = [self.maps[i] for i in self.map_index]
+        self._block_lo = np.stack([m.block_lo for m in cam_maps])
+        self._block_hi = np.stack([m.block_hi for m in cam_maps])
         self._Kc = np.stack([m.canvas_K(c.K) for c, m in
                              zip(self.cameras, (self.maps[i] for i in self.map_index))])
         self._R = np.stack([np.asarray(c.R, float) for c in self.cameras])
@@ -157,18 +163,19 @@ class Renderer:
             if s.noise_std > 0:
                 pool = self._noise_pool()
         rects = self._rects(idx, pos)
+        regions = regions_of(self._block_lo[idx], self._block_hi[idx], rects, (H, W))
         rgb = np.empty((n, H, W, 3), np.uint8)
         labels = np.zeros((n, H, W), np.uint8)
 
         canvases = self.raster.draw(self.view_projs[idx], pos, bands=idx)
         for k, i in enumerate(idx):
             noise = None if pool is None else pool[offsets[k]:offsets[k] + H * W * 3].reshape(H, W * 3)
-            self._finish(int(i), canvases[k], rects[k], background.rgb[i], rgb[k], labels[k],
+            self._finish(int(i), canvases[k], rects[k], regions[k], background.rgb[i], rgb[k], labels[k],
                          None if clean else gains[k], noise)
         return Frames(rgb, labels, tuple(self.numbers[i] for i in idx))
 
-    def _finish(self, i: int, canvas: np.ndarray, rects: list, background: np.ndarray, rgb: np.ndarray,
-                labels: np.ndarray, gain: float | None, noise: np.ndarray | None) -> None:
+    def _finish(self, i: int, canvas: np.ndarray, rects: np.ndarray, regions: list, background: np.ndarray,
+                rgb: np.ndarray, labels: np.ndarray, gain: float | None, noise: np.ndarray | None) -> None:
         """Camera ``i``'s distorted frame and labels from its canvas, into ``rgb`` and ``labels``.
 
         Outside the regions the people can reach the frame is the cached background, bit
@@ -178,13 +185,12 @@ class Renderer:
         m = self.maps[self.map_index[i]]
         H, W = self.height, self.width
         np.copyto(rgb, background)
-        if rects:
-            alpha = self._alpha
-            box = _union(rects, self.canvas_size)
-            x0, y0, x1, y1 = box
+        if regions:
+            scratch, alpha = self._rgba, self._alpha
+            x0, y0, x1, y1 = _union(rects, self.canvas_size)
             cv2.extractChannel(canvas[y0:y1, x0:x1], 3, dst=alpha[y0:y1, x0:x1])
-            for r0, r1, c0, c1 in affected_regions(m, rects):
-                rgba = self._rgba[:r1 - r0, :c1 - c0]
+            for r0, r1, c0, c1 in regions:
+                rgba = scratch[:r1 - r0, :c1 - c0]
                 distort_region(canvas, m, (r0, r1, c0, c1), rgba)
                 cv2.cvtColor(rgba, cv2.COLOR_RGBA2RGB, dst=rgb[r0:r1, c0:c1])
                 distort_region(alpha, m, (r0, r1, c0, c1), labels[r0:r1, c0:c1], nearest=True)
@@ -198,41 +204,39 @@ class Renderer:
             self._pool = noise_pool(float(self.scene.render.noise_std), self.height * self.width * 3)
         return self._pool
 
-    def _rects(self, idx: np.ndarray, pos: np.ndarray) -> list[list[tuple[float, float, float, float]]]:
-        """Per camera, canvas boxes (x0, y0, x1, y1) holding every pixel a visible person covers.
+    def _rects(self, idx: np.ndarray, pos: np.ndarray) -> np.ndarray:
+        """(n, people, 4) canvas boxes (x0, y0, x1, y1) holding every pixel each person covers.
 
         Each person's vertices are projected on the ideal canvas (exact pinhole, the
         matrices the rasteriser uses, OpenCV pixel convention); the pixels a person
         covers lie inside the box of its projected vertices, widened by 2 px for
-        rasterisation. A person straddling the near plane gets the whole canvas, one
-        wholly behind it none; a side on the canvas edge extends to infinity.
+        rasterisation. A person straddling the near plane gets the whole canvas; hidden,
+        wholly behind the near plane or off the canvas: a NaN row. A side on the canvas
+        edge extends to infinity.
         """
         cw, ch = self.canvas_size
-        rects = [[] for _ in idx]
-        for p, pts in enumerate(self._people_pts):
-            if not np.isfinite(pos[p]).all():
-                continue
-            world = pts + np.array([pos[p, 0], pos[p, 1], 0.0])
-            cam = np.einsum("nij,mj->nmi", self._R[idx], world) + self._t[idx][:, None, :]
-            z = cam[..., 2]
-            uvw = np.einsum("nij,nmj->nmi", self._Kc[idx], cam)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                uv = uvw[..., :2] / z[..., None]
-            front = (z > 1.001 * ZNEAR).all(axis=1)
-            behind = (z < 0.999 * ZNEAR).all(axis=1)
-            lo = np.floor(uv.min(axis=1)) - 2
-            hi = np.ceil(uv.max(axis=1)) + 2
-            for k in range(len(idx)):
-                if behind[k]:
-                    continue                            # clipped away entirely
-                if not front[k]:
-                    rects[k].append((-np.inf, -np.inf, np.inf, np.inf))
-                    continue
-                (x0, y0), (x1, y1) = lo[k], hi[k]
-                if x1 < 0 or y1 < 0 or x0 > cw - 1 or y0 > ch - 1:
-                    continue                            # off the canvas
-                rects[k].append((-np.inf if x0 <= 0 else x0, -np.inf if y0 <= 0 else y0,
-                                 np.inf if x1 >= cw - 1 else x1, np.inf if y1 >= ch - 1 else y1))
+        n, P = len(idx), len(self._people_pts)
+        rects = np.full((n, P, 4), np.nan)
+        shown = np.isfinite(pos).all(axis=1)
+        if not shown.any():
+            return rects
+        world = self._people_pts[shown] + np.column_stack([pos[shown], np.zeros(shown.sum())])[:, None, :]
+        cam = np.einsum("nij,pmj->npmi", self._R[idx], world) + self._t[idx][:, None, None, :]
+        z = cam[..., 2]
+        uvw = np.einsum("nij,npmj->npmi", self._Kc[idx], cam)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = uvw[..., :2] / z[..., None]
+        lo = np.floor(uv.min(axis=2)) - 2
+        hi = np.ceil(uv.max(axis=2)) + 2
+        box = np.concatenate([lo, hi], axis=-1)                      # (n, shown, 4)
+        box[..., :2] = np.where(box[..., :2] <= 0, -np.inf, box[..., :2])
+        box[..., 2:] = np.where(box[..., 2:] >= np.array([cw - 1, ch - 1]), np.inf, box[..., 2:])
+        off = (hi[..., 0] < 0) | (hi[..., 1] < 0) | (lo[..., 0] > cw - 1) | (lo[..., 1] > ch - 1)
+        front = (z > 1.001 * ZNEAR).all(axis=2)
+        behind = (z < 0.999 * ZNEAR).all(axis=2)
+        box[~front] = [-np.inf, -np.inf, np.inf, np.inf]              # straddles the near plane
+        box[behind | (front & off)] = np.nan
+        rects[:, shown] = box
         return rects
 
     def _background_frames(self) -> Frames:
@@ -278,7 +282,7 @@ class Renderer:
 def _union(rects, canvas_size) -> tuple[int, int, int, int]:
     """Integer canvas slice bounds (x0, y0, x1, y1), end exclusive, of the union of ``rects``."""
     cw, ch = canvas_size
-    r = np.asarray(rects, float)
+    r = rects[~np.isnan(rects).any(axis=1)]
     x0, y0 = np.clip(r[:, :2].min(axis=0), 0, [cw, ch])
     x1, y1 = np.clip(r[:, 2:].max(axis=0) + 1, 0, [cw, ch])
     return int(x0), int(y0), int(x1), int(y1)
