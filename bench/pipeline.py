@@ -22,9 +22,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-import scene  # noqa: E402
-from pipeline import Pipeline, background_model, load_params  # noqa: E402
-from pipeline.reference import ReferencePipeline  # noqa: E402
+import scene
+from pipeline import Pipeline, background_model, load_params
+from pipeline.reference import ReferencePipeline
 
 
 def load_data(args):

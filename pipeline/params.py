@@ -16,9 +16,10 @@ from __future__ import annotations
 import dataclasses
 import os
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import yaml
 
@@ -37,7 +38,7 @@ def check_odd_kernel(name: str, value: Any) -> int:
 def check_range(name: str, value: Any, low: float, high: float, *, low_open=False, high_open=False) -> float:
     """Return ``value`` as a float in the interval ``low``..``high`` (open ends as asked)."""
     if isinstance(value, bool):
-        raise ValueError(f"{name}: expected a number, got {value!r}")
+        raise ValueError(f"{name}: expected a number, got {value!r}")  # noqa: TRY004
     x = check_positive(name, value, allow_zero=True) if low >= 0 else float(value)
     if (x < low or (low_open and x == low)) or (x > high or (high_open and x == high)):
         lo, hi = ("(" if low_open else "["), (")" if high_open else "]")
@@ -75,7 +76,7 @@ class PipelineParams:
     column_threshold: float = 32.0
 
     def __post_init__(self):
-        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
+        set_ = lambda k, v: object.__setattr__(self, k, v)
         set_("threshold_deg", check_range("threshold_deg", self.threshold_deg, 0, 90, low_open=True, high_open=True))
         set_("brightness_floor", check_range("brightness_floor", self.brightness_floor, 0, 442))
         set_("dark_delta", check_positive("dark_delta", self.dark_delta, allow_zero=True))
@@ -85,7 +86,7 @@ class PipelineParams:
         set_("column_threshold", check_positive("column_threshold", self.column_threshold))
 
     @classmethod
-    def from_mapping(cls, values: Mapping[str, Any] | None) -> "PipelineParams":
+    def from_mapping(cls, values: Mapping[str, Any] | None) -> PipelineParams:
         """Parameters from a mapping; unknown keys raise, missing keys take the defaults."""
         if values is None:
             values = {}
@@ -93,7 +94,7 @@ class PipelineParams:
         return cls(**dict(values))
 
     @classmethod
-    def from_yaml(cls, path: str | os.PathLike) -> "PipelineParams":
+    def from_yaml(cls, path: str | os.PathLike) -> PipelineParams:
         """Parameters from a YAML file (a mapping at top level, or under a ``pipeline`` key)."""
         path = Path(path)
         if not path.is_file():
@@ -110,7 +111,7 @@ class PipelineParams:
         """Plain dict of the parameters (YAML/JSON friendly)."""
         return dataclasses.asdict(self)
 
-    def replace(self, **changes) -> "PipelineParams":
+    def replace(self, **changes) -> PipelineParams:
         """A copy with ``changes`` applied (validated)."""
         return dataclasses.replace(self, **changes)
 

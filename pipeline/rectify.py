@@ -103,7 +103,7 @@ class Rectifier:
     fixed_map: np.ndarray
 
     @classmethod
-    def build(cls, cameras, row_stride: int | None = None, width: int | None = None) -> "Rectifier":
+    def build(cls, cameras, row_stride: int | None = None, width: int | None = None) -> Rectifier:
         cameras = tuple(cameras)
         if not cameras:
             raise ValueError("cameras: expected at least one calibrated camera")
@@ -127,7 +127,7 @@ class Rectifier:
         big_y = np.concatenate([s[1] for s in stacked_y])
         fixed, _ = cv2.convertMaps(big_x, big_y, cv2.CV_16SC2, nninterpolation=True)
         bearings = np.stack([column_bearings(c, K, width) for c, K in zip(cameras, Ks)])
-        ro = lambda a: (a.setflags(write=False), a)[1]  # noqa: E731
+        ro = lambda a: (a.setflags(write=False), a)[1]
         return cls(width, out_h, row_stride, ro(np.stack(Ks)), ro(bearings), ro(np.stack(mx)),
                    ro(np.stack(my)), fixed)
 

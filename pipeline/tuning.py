@@ -6,8 +6,8 @@ process, so the same data and seed give the same trials and the same best parame
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

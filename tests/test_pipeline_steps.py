@@ -9,9 +9,21 @@ from hypothesis.extra import numpy as hnp
 from scipy import ndimage
 
 import scene
-from pipeline import (Pipeline, PipelineParams, background_model, cdnet_metrics, colour_angle_foreground,
-                      confusion, median_threshold, open_masks, rle_bits, rle_decode, rle_encode,
-                      scanline_bits, spatial_smooth)
+from pipeline import (
+    Pipeline,
+    PipelineParams,
+    background_model,
+    cdnet_metrics,
+    colour_angle_foreground,
+    confusion,
+    median_threshold,
+    open_masks,
+    rle_bits,
+    rle_decode,
+    rle_encode,
+    scanline_bits,
+    spatial_smooth,
+)
 from pipeline.reference import ReferencePipeline
 from pipeline.synthetic import synthetic_sequence
 
@@ -65,7 +77,7 @@ def test_opening_removes_specks_keeps_blocks_and_edges():
     m[0, 8, 8] = True
     m[1, 7:, :4] = True            # touches the border: kept whole
     out = open_masks(m, 3)
-    assert out[0, 8, 8] == False  # noqa: E712
+    assert out[0, 8, 8] == False
     np.testing.assert_array_equal(out[0, 2:6, 2:6], True)
     np.testing.assert_array_equal(out[1], m[1])
     ref = np.stack([ndimage.binary_opening(x, np.ones((3, 3)), border_value=0) for x in m])
@@ -97,7 +109,7 @@ def test_bearing_of_projected_world_point(index):
         if (cam.R @ p_world + cam.t)[2] <= 0 or not (3 <= u < cam.width - 3 and 3 <= v < cam.height - 3):
             continue
         mask = np.zeros((1, cam.height, cam.width), bool)
-        r, c = int(round(v)), int(round(u))
+        r, c = round(v), round(u)
         mask[0, r - 2:r + 3, c - 2:c + 3] = True
         cols = np.flatnonzero(pipe.rectifier.rectify(mask)[0].any(axis=0))
         assert cols.size
@@ -187,7 +199,7 @@ def test_metrics_empty_cases():
 def test_production_matches_reference_on_lab_frames():
     cams = LAB[:3]
     rng = np.random.default_rng(3)
-    bg, frames, labels = synthetic_sequence(cams, 3, rng)
+    bg, frames, _labels = synthetic_sequence(cams, 3, rng)
     bg[:, 380:, :150] //= 10                       # a dark corner exercises the brightness floor
     frames[:, :, 380:, :150] //= 10
     params = PipelineParams(temporal_alpha=0.6)

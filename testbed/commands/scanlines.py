@@ -37,8 +37,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from testbed.cli import UsageError
     from pipeline.params import load_params
+    from testbed.cli import UsageError
 
     params = load_params(args.params)
     if args.frames is not None and args.frames < 1:
