@@ -13,6 +13,8 @@ on exactly the same data (the paper's figure 13).
 
 from __future__ import annotations
 
+import time
+from collections import defaultdict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -129,16 +131,21 @@ class LiveSource:
         self.rng = rng
         self.keep_frames = keep_frames
         self._on: set[int] = set()
+        self.seconds: dict[str, float] = defaultdict(float)   # time spent per stage
 
     def scanlines(self, index: int, positions_xy: np.ndarray, numbers: tuple[int, ...]):
         """(k, W) bool scanlines of cameras ``numbers`` and, if kept, their RGB frames."""
+        t0 = time.perf_counter()
         frames = self.renderer.render(positions_xy, cameras=numbers, rng=self.rng)
+        t1 = time.perf_counter()
         out = []
         for i, n in enumerate(numbers):
             if n not in self._on:
                 self.pipes[n].reset()
             out.append(self.pipes[n].process(frames.rgb[i:i + 1])[0])
         self._on = set(numbers)
+        self.seconds["render"] += t1 - t0
+        self.seconds["pipeline"] += time.perf_counter() - t1
         return np.array(out), (frames.rgb if self.keep_frames else None)
 
     def close(self) -> None:
@@ -166,12 +173,15 @@ def tracker_params(scene: Scene) -> TrackerParams:
 
 
 def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_frame=None,
-             progress: bool = False):
+             progress: bool = False, seconds: dict | None = None):
     """Run the tasked network over ``truth`` (frames, people, 2) metres; yield :class:`FrameResult`.
 
     source : :class:`LiveSource` or :class:`PrecomputedSource`
     on_frame : optional callback called with each result
+    seconds : optional dict; the central node's time per stage ("hull", "tracker",
+        "tasker", seconds) is added to it
     """
+    seconds = defaultdict(float) if seconds is None else seconds
     from tqdm import tqdm
 
     config.check(len(scene.cameras))
@@ -188,11 +198,15 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
                   disable=not progress):
         numbers = tuple(int(i) + 1 for i in tasked)
         scan, rgb = source.scanlines(t, truth[t], numbers)
+        t0 = time.perf_counter()
         bearings = np.array([source.bearings[n] for n in numbers])
         hull = visual_hull_of_scanlines(xy[tasked], bearings, scan, scene.room.polygon)
         polygons = prune_small(hull, object_area)
         centres = polygon_centres(polygons)
+        t1 = time.perf_counter()
         ids, est = tracker.step(centres)
+        seconds["hull"] = seconds.get("hull", 0.0) + t1 - t0
+        seconds["tracker"] = seconds.get("tracker", 0.0) + time.perf_counter() - t1
         area = float(sum(p.area for p in polygons))
         result = FrameResult(
             index=t, tasked=numbers, scanlines=scan, polygons=polygons, hull_area=area,
@@ -205,6 +219,7 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
         yield result
         previous = numbers
         if (t + 1) % config.update_every == 0 and config.tasker != "uniform":
+            t0 = time.perf_counter()
             estimates = centres
             if config.feedback == "tracks" and len(tracker.estimates()):
                 estimates = tracker.estimates()
@@ -212,6 +227,7 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
             tasked = choose_cameras(config.tasker, config.k, xy, yaw, fov, estimates, radius,
                                     scene.room.polygon, current=current, m=config.m,
                                     uniform_sets=uniform, rng=np.random.default_rng(t))
+            seconds["tasker"] = seconds.get("tasker", 0.0) + time.perf_counter() - t0
 
 
 def summarise(results: list[FrameResult], scene: Scene) -> dict:
