@@ -221,11 +221,12 @@ class Renderer:
         if not shown.any():
             return rects
         world = self._people_pts[shown] + np.column_stack([pos[shown], np.zeros(shown.sum())])[:, None, :]
-        cam = np.einsum("nij,pmj->npmi", self._R[idx], world) + self._t[idx][:, None, None, :]
-        z = cam[..., 2]
-        uvw = np.einsum("nij,npmj->npmi", self._Kc[idx], cam)
+        p, m = world.shape[:2]
+        cam = self._R[idx] @ world.reshape(-1, 3).T + self._t[idx][:, :, None]     # (n, 3, p * m)
+        uvw = (self._Kc[idx] @ cam).reshape(n, 3, p, m)
+        z = cam[:, 2].reshape(n, p, m)
         with np.errstate(divide="ignore", invalid="ignore"):
-            uv = uvw[..., :2] / z[..., None]
+            uv = np.moveaxis(uvw[:, :2] / z[:, None], 1, -1)                      # (n, p, m, 2)
         lo = np.floor(uv.min(axis=2)) - 2
         hi = np.ceil(uv.max(axis=2)) + 2
         box = np.concatenate([lo, hi], axis=-1)                      # (n, shown, 4)
