@@ -82,7 +82,7 @@ class AngleTerms:
         self.floor2 = np.float32(brightness_floor) ** 2
         self.delta2 = np.float32(dark_delta) ** 2
         self.dark_bg = (self.bb < self.floor2).astype(np.uint8) * 255
-        self.any_dark_bg = bool(self.dark_bg.any())
+        self.cam_dark_bg = self.dark_bg.reshape(len(self.bb), -1).any(axis=1)
 
     def mask(self, frames: np.ndarray, out: np.ndarray) -> np.ndarray:
         """Foreground of ``frames`` (n_cams, H, W, 3) uint8 into ``out`` (n_cams, H, W) uint8 0/255."""
@@ -95,7 +95,7 @@ class AngleTerms:
             cv2.compare(cv2.multiply(dot, dot), cv2.multiply(aa, self.c2bb[i]), cv2.CMP_LT, dst=out[i])
             if self.floor2 > 0:
                 dark = cv2.compare(aa, float(self.floor2), cv2.CMP_LT)
-                if self.any_dark_bg:
+                if self.cam_dark_bg[i]:
                     cv2.bitwise_or(dark, self.dark_bg[i], dst=dark)
                 if cv2.countNonZero(dark):
                     diff2 = cv2.scaleAdd(dot, -2.0, cv2.add(aa, self.bb[i]))
