@@ -73,7 +73,9 @@ class Renderer:
     One OpenGL pass draws every camera's ideal pinhole image (RGB and labels together)
     on a canvas slightly larger than the image (labels in the alpha channel);
     ``cv2.remap`` applies each camera's lens distortion (bilinear for RGB, nearest for
-    labels); :func:`render.noise.degrade` adds the per-frame gain and the sensor noise.
+    labels) only inside the regions the people can change, the rest of each frame being
+    the cached distorted background (bit-identical to remapping everything); then the
+    per-frame gain and the pooled sensor noise (:mod:`render.noise`). docs/render.md.
     Use as a context manager, or call :meth:`close`.
     """
 
