@@ -66,14 +66,14 @@ class PipelineParams:
         the rectified mask) exceeds this, > 0
     """
 
-    threshold_deg: float = 5.5
+    threshold_deg: float = 3.0
     brightness_floor: float = 25.0
     dark_delta: float = 40.0
-    opening_kernel: int = 5
+    opening_kernel: int = 7
     spatial_kernel: int = 1
     temporal_alpha: float = 0.9
-    median_kernel: int = 7
-    column_threshold: float = 32.0
+    median_kernel: int = 15
+    column_threshold: float = 55.0
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)

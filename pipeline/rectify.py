@@ -5,9 +5,16 @@ Each mask is remapped, in one pass with precomputed maps, to a *level* virtual c
 the same centre and yaw (``cv2.initUndistortRectifyMap`` with the rotation from the real
 camera frame to the virtual one). The virtual camera's y axis is the world's down, so
 every output column is a vertical plane through the camera centre with an exact
-world-frame bearing (:func:`column_bearings`). Its focal length is chosen so that its
-horizontal field of view covers every pixel of the real (distorted) image; pixels are
-square, and the output height covers the real image vertically.
+world-frame bearing (:func:`column_bearings`).
+
+Its horizontal field of view is the band of columns that the real image covers *from
+its top edge to its bottom edge*: the raw image's side edges are curved and slanted in
+the level view (lens distortion and pitch), and a column that the raw image covers only
+at some heights must not be sent as empty where it saw nothing; it is left out of the
+field of view instead, where tasking treats the room as unconstrained. For the lab
+cameras this band is about 47 degrees of the raw image's 49 (at the horizon) to 58
+(at the bottom). Pixels are square, and the output height covers the real image
+vertically.
 """
 
 from __future__ import annotations
@@ -40,22 +47,29 @@ def _border_points(width: int, height: int, per_side: int = 64) -> np.ndarray:
 
 
 def virtual_extent(camera: Camera) -> tuple[float, float, float, float]:
-    """(xmin, xmax, ymin, ymax) of the real image border on the virtual camera's z = 1 plane."""
-    pts = _border_points(camera.width, camera.height).reshape(-1, 1, 2)
+    """Extent of the real image on the virtual camera's z = 1 plane: (xmin, xmax, ymin, ymax).
+
+    x: the columns covered over the whole height of the raw image (between its left and
+    right edges at every row); y: the full vertical extent of the raw image.
+    """
+    per_side = 64
+    pts = _border_points(camera.width, camera.height, per_side).reshape(-1, 1, 2)
     norm = cv2.undistortPoints(pts, camera.K, camera.dist, None, None, None,
                                (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10))
     rays = np.concatenate([norm.reshape(-1, 2), np.ones((len(pts), 1))], 1) @ level_rotation(camera).T
     if np.any(rays[:, 2] <= 0.05):
         raise ValueError(f"camera {camera.number}: field of view too wide to rectify to a level camera")
     x, y = rays[:, 0] / rays[:, 2], rays[:, 1] / rays[:, 2]
-    return float(x.min()), float(x.max()), float(y.min()), float(y.max())
+    left, right = x[2 * per_side:3 * per_side], x[3 * per_side:]
+    return float(left.max()), float(right.min()), float(y.min()), float(y.max())
 
 
 def virtual_camera_matrix(camera: Camera, width: int | None = None) -> tuple[np.ndarray, int]:
     """Camera matrix (3, 3) of the level virtual camera and the output height it needs.
 
     width : output width, pixels (default the camera's). Columns 0 and width - 1 are the
-    left and right extremes of the real image; pixels are square.
+    left and right limits of the band covered over the raw image's whole height (see
+    :func:`virtual_extent`); pixels are square.
     """
     width = camera.width if width is None else int(width)
     xmin, xmax, ymin, ymax = virtual_extent(camera)

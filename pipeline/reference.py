@@ -50,11 +50,12 @@ class ReferencePipeline:
             rect = cv2.remap(fg.astype(np.uint8), self.rectifier.maps_x[i], self.rectifier.maps_y[i],
                              cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
             sums = rect.sum(axis=0).astype(np.float64)
-            rows.append(np.convolve(sums, np.ones(p.spatial_kernel), mode="same") / p.spatial_kernel)
+            padded = np.pad(sums, p.spatial_kernel // 2, mode="edge")
+            rows.append(np.convolve(padded, np.ones(p.spatial_kernel), mode="valid") / p.spatial_kernel)
         smooth = np.stack(rows)
         if self.state is not None and p.temporal_alpha != 1.0:
             smooth = p.temporal_alpha * smooth + (1.0 - p.temporal_alpha) * self.state
         self.state = smooth
-        med = np.stack([ndimage.median_filter(s, size=p.median_kernel, mode="constant", cval=0.0)
+        med = np.stack([ndimage.median_filter(s, size=p.median_kernel, mode="nearest")
                         for s in smooth])
         return med > p.column_threshold
