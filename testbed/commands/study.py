@@ -18,6 +18,8 @@ STUDY_HELP = {
     "cameras": "residual vs number of cameras and objects (paper figs 5, 6)",
     "static": "taskers on static objects (paper fig 8)",
     "moving": "taskers on walking objects, update rates (paper figs 9, 10)",
+    "lab": "taskers on the rendered lab, normalised by all 16 cameras (paper fig 13)",
+    "tracking": "tracking with tasked vs uniform cameras (paper section 6, fig 14)",
 }
 
 
@@ -29,7 +31,9 @@ def add_parser(subparsers) -> None:
         sp = sub.add_parser(name, help=text, description=text)
         _module(name).add_arguments(sp)
         g = sp.add_argument_group("common options")
-        g.add_argument("--trials", type=int, default=500, help="trials per setting (default 500, as the paper)")
+        trials = getattr(_module(name), "DEFAULT_TRIALS", 500)
+        g.add_argument("--trials", type=int, default=trials,
+                       help=f"trials per setting (default {trials}" + (", as the paper)" if trials == 500 else ")"))
         g.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
         g.add_argument("--json", action="store_true", help="print one JSON document instead of a table")
         g.add_argument("--plot", metavar="FILE.png", help="draw the paper's figure to this PNG")
