@@ -31,7 +31,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-__all__ = ["Trajectory", "random_drop", "random_waypoint", "circle_polygon"]
+__all__ = ["Trajectory", "circle_polygon", "random_drop", "random_waypoint"]
 
 #: Tolerance (metres) on the no-overlap and inside-room constraints.
 _EPS = 1e-9

@@ -27,7 +27,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-__all__ = ["default_workers", "open_client", "run_tasks", "chunk"]
+__all__ = ["chunk", "default_workers", "open_client", "run_tasks"]
 
 
 def default_workers() -> int:

@@ -2,7 +2,8 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from shapely.geometry import Point, box
 
 from scene.motion import Trajectory, circle_polygon, random_drop, random_waypoint
@@ -65,7 +66,7 @@ def test_people_move_and_reach_far():
 
 def test_head_on_pair_turns_right(monkeypatch):
     # Two people walking straight at each other along the x axis each turn clockwise.
-    import scene.motion as motion
+    from scene import motion
 
     initial = np.array([[-0.5, 0.0], [0.5, 0.0]])
     dests = iter([np.array([0.7, 0.0]), np.array([-0.7, 0.0])])
@@ -111,3 +112,27 @@ def test_trajectory_validation():
         Trajectory(np.zeros((4, 2, 2)), [0.1], 0.1)
     with pytest.raises(ValueError, match="dt"):
         Trajectory(np.zeros((4, 2, 2)), [0.1, 0.1], 0.0)
+
+
+@settings(max_examples=20, deadline=None)
+@given(theta=st.floats(0, 2 * np.pi), offset=st.floats(-0.05, 0.05))
+def test_any_head_on_pair_turns_right(theta, offset):
+    from unittest import mock
+
+    from scene import motion
+
+    u = np.array([np.cos(theta), np.sin(theta)])
+    n = np.array([-u[1], u[0]])  # left of u
+    initial = np.array([-0.45 * u, 0.45 * u + offset * n])
+    goals = [0.7 * u, -0.7 * u + offset * n]
+    dests = iter(goals)
+    with mock.patch.object(motion, "_sample_in", lambda region, rng, k: next(dests, np.zeros(2))):
+        pos = random_waypoint(CIRCLE, [0.1, 0.1], 10, 0.1, 1.0, np.random.default_rng(0),
+                              initial=initial)
+    _check_valid(CIRCLE, pos, np.array([0.1, 0.1]))
+    # Each leaves its straight line only to its right (cross(heading, offset) < 0).
+    for i, heading in ((0, u), (1, -u)):
+        rel = pos[:, i] - pos[0, i]
+        lateral = heading[0] * rel[:, 1] - heading[1] * rel[:, 0]
+        assert np.all(lateral <= 1e-9)
+        assert lateral.min() < -0.03

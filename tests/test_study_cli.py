@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-import testbed.cli as cli
+from testbed import cli
 
 
 @pytest.fixture(autouse=True)

@@ -24,8 +24,17 @@ from tasking import TASKERS, choose_cameras, polygon_centres, prune_small, visua
 TASKING_BACKEND = "tasking"
 
 __all__ = [
-    "FOV", "TASKING_BACKEND", "TASKERS", "choose_cameras", "circle_cameras", "circle_room",
-    "hull_residual", "parse_ints", "parse_names", "polygon_centres", "trial_rng",
+    "FOV",
+    "TASKERS",
+    "TASKING_BACKEND",
+    "choose_cameras",
+    "circle_cameras",
+    "circle_room",
+    "hull_residual",
+    "parse_ints",
+    "parse_names",
+    "polygon_centres",
+    "trial_rng",
     "visual_hull_of_discs",
 ]
 

@@ -49,9 +49,8 @@ def parse(args) -> dict:
         raise ValueError(f"--k: {max(ks)} cameras exceed the {args.candidates} candidates")
     taskers = core.parse_names("taskers", args.taskers, ("uniform", "greedy", "lazy_greedy", "incremental"))
     us = core.parse_ints("update-every", args.update_every, minimum=1)
-    if args.m < 1 or args.m >= min(ks):
-        if "incremental" in taskers:
-            raise ValueError(f"--m: expected an integer in [1, min(k) - 1], got {args.m}")
+    if "incremental" in taskers and not 1 <= args.m <= min(ks):
+        raise ValueError(f"--m: expected an integer in [1, min(k) = {min(ks)}], got {args.m}")
     if args.steps < 2:
         raise ValueError(f"--steps: expected an integer >= 2, got {args.steps}")
     if not args.dt > 0 or not args.speed >= 0:
@@ -123,8 +122,8 @@ def format_table(result: dict) -> str:
     cols = list(dict.fromkeys((r["tasker"], r["update_every"]) for r in recs))
     ks = sorted({r["k"] for r in recs})
     t = {(r["tasker"], r["update_every"], r["k"]): r for r in recs}
-    lines = ["Time-averaged residual (object areas) with moving objects "
-             "(incremental/u: re-tasked every u frames):",
+    lines = [("Time-averaged residual (object areas) with moving objects "
+              "(incremental/u: re-tasked every u frames):"),
              f"{'k':>3} " + "".join(f"{_label(*c):>15}" for c in cols)]
     for k in ks:
         lines.append(f"{k:>3} " + "".join(f"{t[(c[0], c[1], k)]['residual']:15.4f}" for c in cols))
