@@ -47,17 +47,26 @@ class TopView:
         img = np.full((self.height, self.width, 3), BACKGROUND, np.uint8)
         reach = 2 * float(np.ptp(self.scene.room.vertices, axis=0).max())
         xy, _, _ = self.scene.floor_poses()
-        cones = img.copy()
+        # Each tasked camera's occluded cones, shaded so that overlaps darken: the hull
+        # is where every tasked camera's cones (or its blind side) meet.
+        shade = np.zeros((self.height, self.width), np.float32)
         for n, scan in zip(result.tasked, result.scanlines):
             c = xy[n - 1]
             b = bearings[n]
+            mask = np.zeros((self.height, self.width), np.uint8)
             for lo, hi in _runs(scan):
-                a0, a1 = b[lo], b[hi - 1]
-                fan = np.linspace(a0, a1, 8)
+                fan = np.linspace(b[lo], b[hi - 1], 8)
                 pts = np.vstack([c, c + reach * np.column_stack([np.cos(fan), np.sin(fan)])])
-                cv2.fillPoly(cones, [self.px(pts)], CONE)
-        cones[self.inside == 0] = BACKGROUND            # cones end at the walls
-        img = cv2.addWeighted(cones, 0.35, img, 0.65, 0)
+                cv2.fillPoly(mask, [self.px(pts)], 1)
+            shade += mask
+        alpha = (0.5 * shade / max(len(result.tasked), 1) * self.inside)[..., None]
+        img = (img * (1 - alpha) + np.array(CONE, np.float32) * alpha).astype(np.uint8)
+        for n in result.tasked:                          # field-of-view edges
+            c, b = xy[n - 1], bearings[n]
+            for a in (b[0], b[-1]):
+                cv2.line(img, tuple(self.px(c)), tuple(self.px(c + reach * np.array([np.cos(a), np.sin(a)]))),
+                         CAMERA_OFF, 1, cv2.LINE_AA)
+        img[self.inside == 0] = BACKGROUND              # cones and edges end at the walls
         for p in result.polygons:
             cv2.fillPoly(img, [self.px(np.asarray(p.exterior.coords))], HULL)
         cv2.polylines(img, [self.px(self.scene.room.vertices)], True, WALL, 2, cv2.LINE_AA)
