@@ -50,12 +50,14 @@ def chunk(n: int, size: int) -> list[tuple[int, int]]:
 
 @contextlib.contextmanager
 def open_client(workers: int | None = None, scheduler: str | None = None,
-                connect_timeout: float = 5.0) -> Iterator[Any]:
+                connect_timeout: float = 5.0, worker_env: dict[str, str] | None = None) -> Iterator[Any]:
     """Yield a ``distributed.Client`` (or ``None`` for ``workers=0``), closed afterwards.
 
     workers : int >= 0 or None (the number of cores); ignored when ``scheduler`` is given
     scheduler : address of an existing scheduler, e.g. ``"tcp://10.0.0.5:8786"``
     connect_timeout : seconds to wait for ``scheduler`` before giving up
+    worker_env : environment variables of the local cluster's worker processes, e.g.
+        ``{"LP_NUM_THREADS": "1"}`` (an existing cluster keeps its own)
     """
     if scheduler is None and workers is not None and int(workers) < 0:
         raise ValueError(f"workers: expected an integer >= 0, got {workers}")
@@ -81,7 +83,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
         warnings.simplefilter("ignore", UserWarning)
         cluster = LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-            silence_logs=logging.CRITICAL,
+            silence_logs=logging.CRITICAL, **({"env": dict(worker_env)} if worker_env else {}),
         )
     client = Client(cluster)
     try:

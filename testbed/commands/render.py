@@ -1,32 +1,44 @@
-"""``camtask render SCENE --frames N --seed S --out DIR``: render a dataset to disk.
+"""``camtask render SCENE --episodes E --frames F --seed S --out DIR``: a synthetic dataset.
 
-People walk by the random-waypoint model (:func:`scene.motion.random_waypoint`); the
-layout is described in :mod:`testbed.dataset` and docs/dataset.md.
+Each episode is a walk of the scene's people (random waypoints) rendered by every
+camera, with exact label masks, unoccluded per-person silhouettes, the node pipeline's
+scanlines, ground-truth scanlines and the ground-truth visual hull. Episodes run on Dask
+workers (a local cluster by default), each written to a temporary folder and renamed
+when complete; ``DIR/manifest.json`` lists the finished ones with checksums. The layout
+is in :mod:`testbed.generate`, :mod:`testbed.episodes` and docs/dataset.md.
 """
 
 from __future__ import annotations
 
 import argparse
-import platform
 import sys
-from importlib import metadata
 from pathlib import Path
-
-import numpy as np
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        "render", help="render RGB frames, label masks and calibration of a scene to a directory",
-        description="Render frames, exact label masks, background frames and OpenCV calibration files "
-                    "of a calibrated scene, people walking by the random-waypoint model.")
+        "render", help="render a dataset of episodes: frames, masks, silhouettes, scanlines, hulls",
+        description="Render episodes of a calibrated scene, people walking by the random-waypoint model: "
+                    "frames, exact label masks, per-person silhouettes, background, OpenCV calibration, "
+                    "scanlines and the ground-truth visual hull, one folder per episode, with a manifest "
+                    "of checksums (docs/dataset.md).")
     p.add_argument("scene", metavar="SCENE", help="scene YAML file or built-in name (lab)")
-    p.add_argument("--frames", type=int, default=10, help="number of frames (default 10)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--episodes", type=int, default=1, help="number of episodes (default 1)")
+    p.add_argument("--frames", type=int, default=10, help="frames per episode (default 10)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the run (default 0)")
     p.add_argument("--out", required=True, help="output directory (must not exist or be empty)")
     p.add_argument("--people", type=int, default=None, help="number of people (default: the scene's)")
     p.add_argument("--cameras", default=None, help="comma-separated camera numbers, e.g. 1,3,5 (default all)")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing non-empty --out")
+    p.add_argument("--format", choices=("png", "video"), default="png",
+                   help="RGB frames as PNG files or one lossless FFV1 .mkv per camera (default png)")
+    p.add_argument("--params", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: number of cores; 0 = in this process)")
+    g.add_argument("--scheduler", help="address of an existing Dask scheduler (DIR must be shared)")
+    m = p.add_mutually_exclusive_group()
+    m.add_argument("--resume", action="store_true", help="finish an interrupted run: keep verified episodes")
+    m.add_argument("--overwrite", action="store_true", help="replace an existing non-empty --out")
     p.set_defaults(func=run)
 
 
@@ -40,52 +52,53 @@ def parse_cameras(text: str | None):
         raise ValueError(f"--cameras: expected comma-separated camera numbers, got {text!r}") from None
 
 
-def versions() -> dict:
-    out = {"python": platform.python_version()}
-    for dist in ("numpy", "opencv-python-headless", "pyrender2", "PyOpenGL", "trimesh", "shapely", "camtask"):
-        try:
-            out[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            pass
-    return out
+def check_positive(name: str, value: int) -> int:
+    if value < 1:
+        raise ValueError(f"{name}: expected an integer >= 1, got {value}")
+    return value
+
+
+def build_config(args: argparse.Namespace):
+    """Validate the arguments (no rendering) and return the :class:`EpisodeConfig`."""
+    from pipeline.params import load_params
+    from render.renderer import check_camera_numbers
+    from testbed.episodes import EpisodeConfig, load_episode_scene, silhouette_dtype
+
+    check_positive("--episodes", args.episodes)
+    check_positive("--frames", args.frames)
+    if args.workers is not None and args.workers < 0:
+        raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
+    config = EpisodeConfig(scene=args.scene, people=args.people, cameras=parse_cameras(args.cameras),
+                           frames=args.frames, seed=args.seed, fmt=args.format,
+                           params=load_params(args.params).to_dict())
+    scene = load_episode_scene(config)
+    if not scene.is_calibrated:
+        raise ValueError(f"scene: {scene.name!r} has floor-plane cameras only; rendering needs calibrated cameras")
+    check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])
+    silhouette_dtype(scene.people.count)
+    return config
 
 
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from render import Renderer
-    from scene import load_scene
-    from scene.config import BUILTIN_SCENES, scene_path
-    from testbed.dataset import DatasetWriter, check_output_dir
-    from testbed.episode import walk, with_people
+    from testbed.generate import generate, prepare_output
+    from testbed.parallel import open_client
 
-    if args.frames < 1:
-        raise ValueError(f"--frames: expected a number >= 1, got {args.frames}")
-    check_output_dir(args.out, args.overwrite)
-    source = scene_path(args.scene) if args.scene in BUILTIN_SCENES else Path(args.scene)
-    scene = with_people(load_scene(args.scene), args.people)
-    cameras = parse_cameras(args.cameras)
-    motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
-    people = scene.people
-    track = walk(scene, args.frames, motion_rng)
-    with Renderer(scene, cameras) as renderer, \
-            DatasetWriter(args.out, renderer.cameras, overwrite=args.overwrite) as writer:
-        writer.write_background(renderer.background().rgb)
-        for f in tqdm(range(args.frames), desc="render", unit="frame", file=sys.stderr):
-            frames = renderer.render(track[f], rng=sensor_rng)
-            writer.write_frame(f, frames.rgb, frames.labels, track[f], people.radius, people.height)
-        writer.write_meta({
-            "seed": args.seed,
-            "scene": scene.name,
-            "scene_file": str(source),
-            "scene_yaml": Path(source).read_text(),
-            "people": people.count,
-            "cameras": list(renderer.numbers),
-            "frames": args.frames,
-            "dt": scene.dt,
-            "backend": renderer.backend,
-            "background": "clean: no sensor noise, no gain jitter",
-            "versions": versions(),
-        })
-    print(f"wrote {args.frames} frames x {len(renderer.numbers)} cameras to {args.out}", file=sys.stderr)
+    config = build_config(args)
+    out = Path(args.out)
+    keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
+    todo = args.episodes - len(keep)
+    if todo == 0:
+        print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
+        return 0
+    workers = args.workers
+    with open_client(workers, args.scheduler, worker_env={"LP_NUM_THREADS": "1"}) as client, \
+            tqdm(total=todo * args.frames, desc="render", unit="frame", file=sys.stderr,
+                 dynamic_ncols=True) as bar:
+        info = {"workers": workers, "scheduler": args.scheduler,
+                "progress": "per frame in-process, per episode (weighted by frames) on Dask"}
+        done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
+    print(f"wrote {len(done) - len(keep)} episodes x {args.frames} frames to {out} "
+          f"({len(done)}/{args.episodes} finished)", file=sys.stderr)
     return 0

@@ -1,0 +1,285 @@
+"""One episode of a synthetic dataset, rendered and processed into its own folder.
+
+:func:`render_episode` is the unit of work that ``camtask render`` spreads over Dask
+workers: it renders the walk of episode ``index``, writes every file of the episode into
+a temporary folder ``DIR/.episode_NNNN.<random>.tmp``, computes the sha256 of each file
+and renames the folder to ``DIR/episode_NNNN`` only when everything is written. Its
+random streams come from ``np.random.SeedSequence(seed, spawn_key=(index,))`` (the
+``index``-th child of ``SeedSequence(seed).spawn``), never from the worker, so the bytes do
+not depend on which worker renders the episode or how many there are.
+
+Each process keeps one :class:`render.Renderer` per (scene, cameras) in a module cache
+(one GL context per process; renderers are never created and destroyed per episode).
+The layout is in docs/dataset.md.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import os
+import shutil
+import tempfile
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from testbed.dataset import frame_name, write_calibration, write_png
+
+#: Formats of the RGB frames: PNG per frame, or one lossless FFV1 video per camera.
+FORMATS = ("png", "video")
+
+_RENDERERS: dict = {}   # (scene source, people, cameras) -> Renderer, one per process
+_RECTIFIERS: dict = {}  # (scene source, cameras) -> {row stride: Rectifier}, see pipeline.runs.make_pipeline
+
+
+@dataclass(frozen=True)
+class EpisodeConfig:
+    """What every episode of a run shares (picklable; sent to the workers).
+
+    scene : built-in scene name or scene file path
+    people : number of people, None for the scene's own
+    cameras : 1-based camera numbers, None for all
+    frames : frames per episode (>= 1)
+    seed : the run's seed S
+    fmt : "png" or "video"
+    params : pipeline parameters as a plain dict (PipelineParams.to_dict())
+    """
+
+    scene: str
+    people: int | None
+    cameras: tuple[int, ...] | None
+    frames: int
+    seed: int
+    fmt: str = "png"
+    params: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {"scene": self.scene, "people": self.people,
+                "cameras": None if self.cameras is None else list(self.cameras),
+                "frames": self.frames, "seed": self.seed, "format": self.fmt, "params": dict(self.params)}
+
+
+def episode_name(index: int) -> str:
+    """``episode_NNNN`` for the 0-based episode ``index``."""
+    return f"episode_{index:04d}"
+
+
+def episode_seed(seed: int, index: int) -> np.random.SeedSequence:
+    """The seed of episode ``index`` of a run with seed ``seed``: ``SeedSequence(seed).spawn(...)[index]``.
+
+    >>> int(episode_seed(7, 2).generate_state(1)[0]) == int(np.random.SeedSequence(7).spawn(3)[2].generate_state(1)[0])
+    True
+    """
+    return np.random.SeedSequence(int(seed), spawn_key=(int(index),))
+
+
+def load_episode_scene(config: EpisodeConfig):
+    """The scene of a run, with ``config.people`` people."""
+    from scene import load_scene
+    from testbed.episode import with_people
+
+    return with_people(load_scene(config.scene), config.people)
+
+
+def _renderer(config: EpisodeConfig, scene):
+    from render import Renderer
+
+    key = (config.scene, scene.people.count, config.cameras)
+    if key not in _RENDERERS:
+        _RENDERERS[key] = Renderer(scene, config.cameras)
+    return _RENDERERS[key]
+
+
+def sha256_file(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def checksums(root: Path) -> dict[str, str]:
+    """sha256 of every file under ``root``, keyed by the POSIX path relative to it, sorted."""
+    return {p.relative_to(root).as_posix(): sha256_file(p)
+            for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def save_npz_exact(path: Path, **arrays) -> None:
+    """Like ``np.savez_compressed``, but the bytes depend only on the arrays (fixed zip dates)."""
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+        for key, val in arrays.items():
+            buf = io.BytesIO()
+            np.lib.format.write_array(buf, np.asanyarray(val), allow_pickle=False)
+            info = zipfile.ZipInfo(f"{key}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+            info.compress_type = zipfile.ZIP_DEFLATED
+            zf.writestr(info, buf.getvalue())
+
+
+def silhouette_dtype(people: int):
+    """uint8 up to 8 people, uint16 up to 16 (PNG stores at most 16 bits)."""
+    if people > 16:
+        raise ValueError(f"--people: silhouettes store one bit per person in a 16-bit PNG; expected at most 16, "
+                         f"got {people}")
+    return np.uint8 if people <= 8 else np.uint16
+
+
+def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Unoccluded silhouette of every person as a bitmask, exactly as if rendered alone.
+
+    positions_xy : (P, 2) float, metres, world frame (NaN rows: hidden)
+    labels : (n_cams, H, W) uint8, the visible labels of the same frame, all cameras of
+        ``renderer`` (0 background, person + 1)
+    Returns (n_cams, H, W) uint8 (uint16 above 8 people), bit ``i`` set where person ``i``
+    covers the pixel when the others are hidden.
+
+    Where person i's canvas box (the renderer's conservative box of every pixel the
+    person covers) meets no other person's box in a camera, nobody can occlude them
+    there, so their silhouette is ``labels == i + 1``; only the cameras where boxes
+    overlap are re-rendered with the others hidden (``clean=True``, labels only). Both are
+    bit-identical to rendering each person alone (tests/test_dataset_outputs.py).
+    """
+    pos = np.asarray(positions_xy, float)
+    P, n = len(pos), len(renderer.numbers)
+    dtype = silhouette_dtype(P)
+    out = np.zeros(labels.shape, dtype)
+    if P == 0:
+        return out
+    rects = renderer._rects(np.arange(n), pos)                          # (n, P, 4) canvas boxes, NaN: unseen
+    x0, y0, x1, y1 = (rects[..., k] for k in range(4))
+    with np.errstate(invalid="ignore"):
+        meet = ((x0[:, :, None] <= x1[:, None, :]) & (x0[:, None, :] <= x1[:, :, None])
+                & (y0[:, :, None] <= y1[:, None, :]) & (y0[:, None, :] <= y1[:, :, None]))  # (n, P, P)
+    meet &= ~np.eye(P, dtype=bool)[None]
+    overlap = meet.any(axis=2)                                          # (n, P)
+    for i in range(P):
+        bit = dtype(1 << i)
+        direct = ~overlap[:, i]
+        out[direct] |= (labels[direct] == i + 1).astype(dtype) * bit
+        cams = np.flatnonzero(overlap[:, i])
+        if cams.size:
+            alone = np.full_like(pos, np.nan)
+            alone[i] = pos[i]
+            f = renderer.render(alone, cameras=[renderer.numbers[c] for c in cams], clean=True)
+            out[cams] |= (f.labels > 0).astype(dtype) * bit
+    return out
+
+
+def hull_record(frame: int, hull) -> dict:
+    """One frame's hull as JSON: area (m^2) and polygons (exterior + holes, metres, 1e-6 m)."""
+    from tasking.hull import prune_small
+
+    polys = prune_small(hull, 0.0)
+    ring = lambda r: [[round(x, 6), round(y, 6)] for x, y in r.coords]   # noqa: E731
+    return {"frame": frame, "area": round(float(sum(p.area for p in polys)), 9),
+            "polygons": [{"exterior": ring(p.exterior), "holes": [ring(h) for h in p.interiors]}
+                         for p in polys]}
+
+
+def render_episode(config: EpisodeConfig, index: int, out: str, progress=None) -> dict:
+    """Render, process and write episode ``index`` into ``out/episode_NNNN``; return its manifest entry.
+
+    progress : optional callable(frames_done_since_last_call) for in-process progress bars
+    """
+    from pipeline import PipelineParams
+    from pipeline.runs import make_pipeline
+    from tasking.hull import visual_hull_of_scanlines
+    from testbed.episode import walk
+
+    out = Path(out)
+    scene = load_episode_scene(config)
+    renderer = _renderer(config, scene)
+    cameras = renderer.cameras
+    numbers = list(renderer.numbers)
+    params = PipelineParams.from_mapping(config.params)
+    ss = episode_seed(config.seed, index)
+    motion_rng, sensor_rng = np.random.default_rng(ss).spawn(2)
+    track = walk(scene, config.frames, motion_rng)
+    people = scene.people
+    bg = renderer.background().rgb
+    pipe = make_pipeline(cameras, params, bg, _RECTIFIERS.setdefault((config.scene, tuple(numbers)), {}))
+    xy_all, _, _ = scene.floor_poses()
+    by_number = {c.number: k for k, c in enumerate(scene.cameras)}
+    camera_xy = xy_all[[by_number[n] for n in numbers]]
+    room = scene.room.polygon
+
+    name = episode_name(index)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out))
+    try:
+        for sub in ("calibration", "background"):
+            (tmp / sub).mkdir()
+        for c in cameras:
+            write_calibration(tmp / "calibration" / f"{c.name}.yaml", c)
+            write_png(tmp / "background" / f"{c.name}.png", bg[numbers.index(c.number)])
+            for sub in ("masks", "silhouettes") + (("frames",) if config.fmt == "png" else ()):
+                (tmp / sub / c.name).mkdir(parents=True)
+        videos = []
+        if config.fmt == "video":
+            from testbed.lossless import VideoWriter
+            (tmp / "frames").mkdir()
+            videos = [VideoWriter(tmp / "frames" / f"{c.name}.mkv", renderer.width, renderer.height,
+                                  scene.frame_rate) for c in cameras]
+        rows, scans, gts, hulls = [], [], [], []
+        try:
+            for f in range(config.frames):
+                fr = renderer.render(track[f], rng=sensor_rng)
+                sil = silhouettes(renderer, track[f], fr.labels)
+                fname = frame_name(f)
+                for k, c in enumerate(cameras):
+                    if videos:
+                        videos[k].write(fr.rgb[k])
+                    else:
+                        write_png(tmp / "frames" / c.name / fname, fr.rgb[k])
+                    write_png(tmp / "masks" / c.name / fname, fr.labels[k])
+                    write_png(tmp / "silhouettes" / c.name / fname, sil[k])
+                scans.append(pipe.process(fr.rgb))
+                gt = pipe.ground_truth(fr.labels)[1]
+                gts.append(gt)
+                hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room)))
+                for pid, (x, y) in enumerate(np.asarray(track[f], float)):
+                    rows.append((f, pid, repr(float(x)), repr(float(y)), people.radius, people.height))
+                if progress is not None:
+                    progress(1)
+        finally:
+            for v in videos:
+                v.close()
+        with open(tmp / "people.csv", "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["frame", "person_id", "x", "y", "radius", "height"])
+            w.writerows(rows)
+        save_npz_exact(tmp / "scanlines.npz", scanlines=np.stack(scans), gt_scanlines=np.stack(gts),
+                       bearings=pipe.bearings, camera_numbers=np.array(numbers))
+        params.to_yaml(tmp / "pipeline.yaml")
+        (tmp / "gt_hull.json").write_text(json.dumps(
+            {"units": "metres, world frame", "source": "ground-truth scanlines of all cameras of the episode",
+             "cameras": numbers, "frames": hulls}, separators=(",", ":")) + "\n")
+        source = config.scene
+        meta = {
+            "episode": index, "seed": config.seed, "spawn_key": [index],
+            "scene": scene.name, "scene_file": source, "scene_yaml": _scene_text(source),
+            "people": people.count, "cameras": numbers, "frames": config.frames, "dt": scene.dt,
+            "format": config.fmt, "backend": renderer.backend,
+            "background": "clean: no sensor noise, no gain jitter",
+            "silhouettes": f"bit i = person i, {np.dtype(silhouette_dtype(people.count)).name} PNG",
+        }
+        (tmp / "meta.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+        files = checksums(tmp)
+        final = out / name
+        if final.exists():                       # a retried task whose first run got this far
+            shutil.rmtree(final)
+        os.rename(tmp, final)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return {"index": index, "name": name, "seed": config.seed, "spawn_key": [index],
+            "frames": config.frames, "files": files}
+
+
+def _scene_text(source: str) -> str:
+    from scene.config import BUILTIN_SCENES, scene_path
+
+    return (scene_path(source) if source in BUILTIN_SCENES else Path(source)).read_text()

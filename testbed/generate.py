@@ -1,0 +1,182 @@
+"""A dataset of episodes on disk: the manifest, resuming, and spreading episodes over Dask.
+
+::
+
+    DIR/manifest.json          every finished episode: index, name, seed, spawn key, frames,
+                               sha256 of each of its files; and the run's arguments
+    DIR/run_info.json          wall-clock times, host names, worker count, package versions
+                               (the only file that differs between identical runs)
+    DIR/episode_NNNN/          one episode (testbed.episodes, docs/dataset.md)
+
+The manifest is rewritten atomically (temporary file + os.replace) after each finished
+episode, and lists episodes in index order with sorted keys, so two runs with the same
+arguments give the same manifest whatever the worker count or completion order.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import shutil
+import socket
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode
+
+MANIFEST = "manifest.json"
+RUN_INFO = "run_info.json"
+FORMAT_VERSION = 1
+
+
+def write_json_atomic(path: Path, data: dict) -> None:
+    from pipeline.params import write_atomic
+
+    write_atomic(path, (json.dumps(data, indent=1, sort_keys=True) + "\n").encode())
+
+
+def read_manifest(out: Path) -> dict | None:
+    path = Path(out) / MANIFEST
+    if not path.is_file():
+        return None
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"--resume: cannot read {path} ({exc})") from None
+
+
+def manifest(config: EpisodeConfig, episodes: int, entries: dict[int, dict]) -> dict:
+    return {"format_version": FORMAT_VERSION, "episodes_planned": episodes, "config": config.to_dict(),
+            "episodes": [entries[i] for i in sorted(entries)]}
+
+
+def verify_episode(out: Path, entry: dict) -> bool:
+    """True when ``out/entry['name']`` holds exactly the files listed, with their sha256."""
+    folder = Path(out) / entry["name"]
+    return folder.is_dir() and checksums(folder) == entry["files"]
+
+
+def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool, overwrite: bool) -> dict[int, dict]:
+    """Check and prepare ``out``; return the finished episodes to keep (index -> entry).
+
+    Without ``resume`` or ``overwrite`` an existing non-empty ``out`` is refused; with
+    ``overwrite`` it is emptied; with ``resume`` the manifest's episodes whose files
+    verify are kept and everything else (unlisted or corrupt episode folders, temporary
+    folders of killed runs) is removed. Raises ValueError / FileExistsError before any work.
+    """
+    out = Path(out)
+    if resume and overwrite:
+        raise ValueError("--resume and --overwrite: expected at most one of them")
+    if out.exists() and not out.is_dir():
+        raise FileExistsError(f"--out: {out} exists and is not a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / f".write-test.{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise ValueError(f"--out: cannot write to {out} ({exc.strerror or exc})") from None
+    existing = [p for p in out.iterdir()]
+    keep: dict[int, dict] = {}
+    if existing and not (resume or overwrite):
+        raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "
+                              "or --overwrite to replace it")
+    if overwrite:
+        for p in existing:
+            shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
+        return keep
+    if resume and existing:
+        old = read_manifest(out)
+        if old is not None:
+            if old.get("config") != config.to_dict() or old.get("episodes_planned") != episodes:
+                raise ValueError(f"--resume: {out / MANIFEST} was written with other arguments "
+                                 f"({_diff(old, config, episodes)}); use --overwrite to start again")
+            for entry in old.get("episodes", []):
+                if verify_episode(out, entry):
+                    keep[int(entry["index"])] = entry
+        wanted = {episode_name(i) for i in keep}
+        for p in existing:
+            if p.name in (MANIFEST, RUN_INFO) or p.name in wanted:
+                continue
+            if p.name.startswith("episode_") or (p.name.startswith(".episode_") and p.name.endswith(".tmp")):
+                shutil.rmtree(p, ignore_errors=True)
+        write_json_atomic(out / MANIFEST, manifest(config, episodes, keep))
+    return keep
+
+
+def _diff(old: dict, config: EpisodeConfig, episodes: int) -> str:
+    new = config.to_dict() | {"episodes": episodes}
+    was = dict(old.get("config") or {}) | {"episodes": old.get("episodes_planned")}
+    keys = sorted(k for k in set(new) | set(was) if new.get(k) != was.get(k))
+    return ", ".join(f"{k}: {was.get(k)!r} then, {new.get(k)!r} now" for k in keys)
+
+
+def versions() -> dict:
+    from importlib import metadata
+
+    out = {"python": platform.python_version()}
+    for dist in ("numpy", "opencv-python-headless", "pyrender2", "PyOpenGL", "shapely", "dask", "distributed",
+                 "imageio-ffmpeg", "camtask"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            pass
+    return out
+
+
+def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, dict], client=None,
+             progress: Callable[[int], None] | None = None, retries: int = 2,
+             run_info: dict | None = None) -> dict[int, dict]:
+    """Render the episodes not in ``keep`` into ``out``; return all finished entries.
+
+    client : a ``distributed.Client`` or None (in this process, one episode after the other)
+    progress : called with a number of frames finished (per frame in-process, per
+        episode on Dask)
+    retries : Dask resubmits an episode whose worker died this many times
+    The manifest is rewritten after every finished episode; on an error, the episodes
+    finished so far stay listed and valid, and the error is re-raised.
+    """
+    out = Path(out)
+    done = dict(keep)
+    todo = [i for i in range(episodes) if i not in done]
+    info = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "host": socket.gethostname(),
+            "versions": versions(), "argv": sys.argv[1:]} | (run_info or {})
+    hosts: dict[str, str] = {}
+
+    def finished(entry: dict, host: str) -> None:
+        done[entry["index"]] = entry
+        hosts[entry["name"]] = host
+        write_json_atomic(out / MANIFEST, manifest(config, episodes, done))
+
+    try:
+        if client is None:
+            for i in todo:
+                finished(render_episode(config, i, str(out), progress), socket.gethostname())
+        else:
+            from distributed import as_completed
+
+            futures = [client.submit(_remote_episode, config, i, str(out), key=f"episode-{i}-{os.getpid()}-{time.time_ns()}",
+                                     pure=False, retries=retries) for i in todo]
+            try:
+                for fut in as_completed(futures):
+                    entry, host = fut.result()
+                    finished(entry, host)
+                    if progress is not None:
+                        progress(entry["frames"])
+            finally:
+                for f in futures:
+                    f.cancel()
+    finally:
+        for p in out.glob(".episode_*.tmp"):        # left behind by workers that died
+            shutil.rmtree(p, ignore_errors=True)
+        info |= {"finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "episodes_done": len(done),
+                 "episode_hosts": dict(sorted(hosts.items()))}
+        write_json_atomic(out / RUN_INFO, info)
+    return done
+
+
+def _remote_episode(config: EpisodeConfig, index: int, out: str) -> tuple[dict, str]:
+    return render_episode(config, index, out), socket.gethostname()
