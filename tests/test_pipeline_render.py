@@ -16,10 +16,10 @@ def lab_render(tmp_path_factory):
     from testbed.cli import main
 
     out = tmp_path_factory.mktemp("lab") / "render"
-    code = main(["render", "lab", "--frames", "3", "--seed", "5", "--out", str(out)])
+    code = main(["render", "lab", "--frames", "3", "--seed", "5", "--out", str(out), "--workers", "0"])
     if code != 0:
         pytest.skip("camtask render failed (no OpenGL backend?)")
-    return out
+    return out / "episode_0000"
 
 
 def test_scanlines_on_rendered_lab(lab_render, capsys):

@@ -12,8 +12,10 @@ from testbed.dataset import read_calibration, read_people
 
 @pytest.mark.render
 def test_render_command_writes_layout(lab, tmp_path):
-    out = tmp_path / "ds"
-    assert main(["render", "lab", "--frames", "2", "--seed", "3", "--out", str(out), "--cameras", "2,7"]) == 0
+    top = tmp_path / "ds"
+    assert main(["render", "lab", "--frames", "2", "--seed", "3", "--out", str(top), "--cameras", "2,7",
+                 "--workers", "0"]) == 0
+    out = top / "episode_0000"
     for name in ("cam02", "cam07"):
         for f in ("000000.png", "000001.png"):
             rgb = cv2.imread(str(out / "frames" / name / f))
@@ -35,11 +37,12 @@ def test_render_command_writes_layout(lab, tmp_path):
     meta = json.loads((out / "meta.json").read_text())
     assert meta["seed"] == 3 and meta["frames"] == 2 and meta["cameras"] == [2, 7]
     # same seed, same bytes
-    again = tmp_path / "again"
-    assert main(["render", "lab", "--frames", "2", "--seed", "3", "--out", str(again), "--cameras", "2,7"]) == 0
+    again = tmp_path / "again" / "episode_0000"
+    assert main(["render", "lab", "--frames", "2", "--seed", "3", "--out", str(again.parent), "--cameras", "2,7",
+                 "--workers", "0"]) == 0
     for p in sorted(out.rglob("*.png")) + [out / "people.csv"]:
         assert p.read_bytes() == (again / p.relative_to(out)).read_bytes(), p
-    assert not list(tmp_path.glob(".*tmp"))                 # no temporary folder left
+    assert not list(top.glob(".*tmp"))                      # no temporary folder left
 
 
 def test_existing_output_dir_is_refused(tmp_path, capsys):

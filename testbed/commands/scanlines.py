@@ -59,7 +59,7 @@ def _run_render(args, params) -> int:
     from pipeline.io import RenderDir, save_npz_atomic
     from pipeline.runs import run_sequence
 
-    render = RenderDir(args.dir)
+    render = RenderDir(episode_dir(Path(args.dir)))
     n = len(render) if args.frames is None else min(args.frames, len(render))
     pipe = Pipeline(render.cameras, params, render.background())
     out = Path(args.out) if args.out else render.root / "scanlines.npz"
@@ -71,6 +71,17 @@ def _run_render(args, params) -> int:
     metrics = result.metrics() | {"params": params.to_dict(), "out": str(out)}
     _report(metrics, [c.number for c in render.cameras], args.json)
     return 0
+
+
+def episode_dir(root: Path) -> Path:
+    """A render directory: ``root`` itself, or the one episode of a dataset written by ``camtask render``."""
+    if (root / "calibration").is_dir() or not (root / "manifest.json").is_file():
+        return root
+    episodes = sorted(p for p in root.glob("episode_*") if p.is_dir())
+    if len(episodes) != 1:
+        raise ValueError(f"DIR: {root} is a dataset of {len(episodes)} episodes; give one episode folder, "
+                         f"e.g. {root / 'episode_0000'}")
+    return episodes[0]
 
 
 def _run_video(args, params) -> int:
