@@ -15,6 +15,7 @@ import sys
 #: Command modules, in the order ``camtask --help`` lists them.
 COMMANDS = (
     "testbed.commands.render",
+    "testbed.commands.export",
     "testbed.commands.study",
     "testbed.commands.scanlines",
     "testbed.commands.tune",

@@ -1,0 +1,39 @@
+"""``camtask export wildtrack DIR OUT [--episode N]``: an episode in the WILDTRACK layout.
+
+See :mod:`testbed.wildtrack` and docs/dataset.md for the layout, the ground grid and
+positionID.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser("export", help="export an episode for multi-view detection code (WILDTRACK layout)",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("layout", choices=("wildtrack",), help="output layout")
+    p.add_argument("dir", metavar="DIR", help="dataset folder from `camtask render` (or one episode folder)")
+    p.add_argument("out", metavar="OUT", help="output folder (must not exist or be empty)")
+    p.add_argument("--episode", type=int, default=0, help="episode index (default 0)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing non-empty OUT")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from testbed.dataset import check_output_dir
+    from testbed.episodes import episode_name
+    from testbed.wildtrack import export_wildtrack
+
+    root = Path(args.dir)
+    if args.episode < 0:
+        raise ValueError(f"--episode: expected an integer >= 0, got {args.episode}")
+    episode = root if (root / "meta.json").is_file() else root / episode_name(args.episode)
+    if not (episode / "meta.json").is_file():
+        raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
+    check_output_dir(args.out, args.overwrite)
+    export_wildtrack(episode, args.out)
+    print(f"wrote {episode} as WILDTRACK layout to {args.out}", file=sys.stderr)
+    return 0

@@ -1,0 +1,140 @@
+"""Export an episode in the WILDTRACK / MultiviewX layout read by multi-view detection code.
+
+::
+
+    OUT/Image_subsets/C<n>/NNNNNNNN.png      RGB frame of camera n (8-digit frame number)
+    OUT/annotations_positions/NNNNNNNN.json  list, one entry per person:
+        {"personID": i, "positionID": x_index + GRID_WIDTH * y_index,
+         "views": [{"viewNum": v, "xmin": .., "ymin": .., "xmax": .., "ymax": ..}, ...]}
+    OUT/calibrations/intrinsic_zero/intr_C<n>.xml   cv2.FileStorage: camera_matrix, distortion_coefficients
+    OUT/calibrations/extrinsic/extr_C<n>.xml        cv2.FileStorage: rvec, tvec (world -> camera, metres)
+    OUT/grid.json                                   the ground grid below, and view -> camera number
+
+Ground grid: origin at the world origin (the room corner), cells of ``CELL`` = 0.025 m
+(WILDTRACK's 2.5 cm), ``x_index = floor(x / CELL)`` along the 22 ft wall (0..268),
+``y_index = floor(y / CELL)`` along the 19 ft wall (0..231), ``positionID = x_index +
+grid_width * y_index`` (WILDTRACK's own convention, with its 480 replaced by our grid
+width, 269 for the lab). Boxes are inclusive pixel bounds of the person's *visible*
+label mask in the distorted image, all -1 when the person is not visible in that view;
+``viewNum`` is 0-based over the episode's cameras in number order.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from testbed.dataset import read_people, write_png
+
+#: Side of a ground-grid cell, metres (WILDTRACK: 2.5 cm).
+CELL = 0.025
+
+
+def grid_shape(room_bounds) -> tuple[int, int]:
+    """(grid_width, grid_height) in cells covering ``(0, 0)..(max x, max y)`` of the room, metres."""
+    _, _, maxx, maxy = room_bounds
+    return math.ceil(maxx / CELL - 1e-9), math.ceil(maxy / CELL - 1e-9)
+
+
+def position_id(xy, grid_width: int) -> np.ndarray:
+    """positionID of floor points ``xy`` (n, 2) metres, world frame.
+
+    >>> position_id([[0.01, 0.0], [0.03, 0.06]], 269).tolist()
+    [0, 539]
+    """
+    idx = np.floor(np.asarray(xy, float) / CELL).astype(int)
+    return idx[:, 0] + grid_width * idx[:, 1]
+
+
+def boxes(labels: np.ndarray, people: int) -> np.ndarray:
+    """Inclusive boxes (xmin, ymin, xmax, ymax) of each person's pixels, (n_cams, people, 4) int, -1 if absent.
+
+    labels : (n_cams, H, W) int, 0 background, person + 1 (pixel indices (row, col); x = col, y = row)
+    """
+    out = np.full((len(labels), people, 4), -1, int)
+    for c, lab in enumerate(labels):
+        for i in range(people):
+            rows = np.flatnonzero((lab == i + 1).any(axis=1))
+            if rows.size:
+                cols = np.flatnonzero((lab[rows[0]:rows[-1] + 1] == i + 1).any(axis=0))
+                out[c, i] = (cols[0], rows[0], cols[-1], rows[-1])
+    return out
+
+
+def _write_fs(path: Path, **mats) -> None:
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+    try:
+        for k, v in mats.items():
+            fs.write(k, np.asarray(v, float))
+    finally:
+        fs.release()
+
+
+def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike) -> Path:
+    """Write episode folder ``episode`` to ``out`` in the WILDTRACK layout (atomically); return ``out``."""
+    from pipeline.io import RenderDir, read_labels
+    from testbed.dataset import read_calibration
+    import yaml
+
+    from scene import Scene
+
+    episode, out = Path(episode), Path(out)
+    meta = json.loads((episode / "meta.json").read_text())
+    numbers = list(meta["cameras"])
+    frames = int(meta["frames"])
+    room = Scene.from_config(yaml.safe_load(meta["scene_yaml"]), source=str(episode / "meta.json")).room
+    gw, gh = grid_shape(room.polygon.bounds)
+    table = read_people(episode / "people.csv")
+    P = int(meta["people"])
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    try:
+        for sub in ("annotations_positions", "calibrations/intrinsic_zero", "calibrations/extrinsic"):
+            (tmp / sub).mkdir(parents=True)
+        for n in numbers:
+            (tmp / "Image_subsets" / f"C{n}").mkdir(parents=True)
+            c = read_calibration(episode / "calibration" / f"cam{n:02d}.yaml")
+            _write_fs(tmp / "calibrations" / "intrinsic_zero" / f"intr_C{n}.xml",
+                      camera_matrix=c["K"], distortion_coefficients=c["dist"].reshape(1, 5))
+            _write_fs(tmp / "calibrations" / "extrinsic" / f"extr_C{n}.xml",
+                      rvec=c["rvec"].reshape(3, 1), tvec=c["tvec"].reshape(3, 1))
+        if meta.get("format") == "video":
+            from testbed.lossless import read_video
+            for n in numbers:
+                for f, rgb in enumerate(read_video(episode / "frames" / f"cam{n:02d}.mkv")):
+                    write_png(tmp / "Image_subsets" / f"C{n}" / f"{f:08d}.png", rgb)
+        else:
+            for n in numbers:
+                for f in range(frames):
+                    shutil.copyfile(episode / "frames" / f"cam{n:02d}" / f"{f:06d}.png",
+                                    tmp / "Image_subsets" / f"C{n}" / f"{f:08d}.png")
+        for f in range(frames):
+            labels = np.stack([read_labels(episode / "masks" / f"cam{n:02d}" / f"{f:06d}.png") for n in numbers])
+            b = boxes(labels, P)
+            rows = table[table["frame"] == f]
+            xy = np.column_stack([rows["x"], rows["y"]]).astype(float)
+            pids = position_id(xy, gw)
+            ann = [{"personID": int(rows["person_id"][k]), "positionID": int(pids[k]),
+                    "views": [{"viewNum": v, "xmin": int(b[v, k, 0]), "ymin": int(b[v, k, 1]),
+                               "xmax": int(b[v, k, 2]), "ymax": int(b[v, k, 3])} for v in range(len(numbers))]}
+                   for k in range(len(rows))]
+            (tmp / "annotations_positions" / f"{f:08d}.json").write_text(json.dumps(ann))
+        (tmp / "grid.json").write_text(json.dumps({
+            "cell_m": CELL, "origin_m": [0.0, 0.0], "grid_width": gw, "grid_height": gh,
+            "position_id": "x_index + grid_width * y_index, x_index = floor(x / cell_m)",
+            "views": {str(v): n for v, n in enumerate(numbers)}, "units": "metres, world frame",
+            "source": str(episode)}, indent=1) + "\n")
+        if out.exists():
+            shutil.rmtree(out)
+        os.rename(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return out
