@@ -174,7 +174,7 @@ def hull_record(frame: int, hull) -> dict:
     from tasking.hull import prune_small
 
     polys = prune_small(hull, 0.0)
-    ring = lambda r: [[round(x, 6), round(y, 6)] for x, y in r.coords]   # noqa: E731
+    ring = lambda r: [[round(x, 6), round(y, 6)] for x, y in r.coords]
     return {"frame": frame, "area": round(float(sum(p.area for p in polys)), 9),
             "polygons": [{"exterior": ring(p.exterior), "holes": [ring(h) for h in p.interiors]}
                          for p in polys]}

@@ -59,14 +59,8 @@ def verify_episode(out: Path, entry: dict) -> bool:
     return folder.is_dir() and checksums(folder) == entry["files"]
 
 
-def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool, overwrite: bool) -> dict[int, dict]:
-    """Check and prepare ``out``; return the finished episodes to keep (index -> entry).
-
-    Without ``resume`` or ``overwrite`` an existing non-empty ``out`` is refused; with
-    ``overwrite`` it is emptied; with ``resume`` the manifest's episodes whose files
-    verify are kept and everything else (unlisted or corrupt episode folders, temporary
-    folders of killed runs) is removed. Raises ValueError / FileExistsError before any work.
-    """
+def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
+    """``out`` as a Path, created and writable; refuse a non-empty one unless ``resume`` or ``overwrite``."""
     out = Path(out)
     if resume and overwrite:
         raise ValueError("--resume and --overwrite: expected at most one of them")
@@ -79,11 +73,23 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
         probe.unlink()
     except OSError as exc:
         raise ValueError(f"--out: cannot write to {out} ({exc.strerror or exc})") from None
-    existing = [p for p in out.iterdir()]
-    keep: dict[int, dict] = {}
-    if existing and not (resume or overwrite):
+    if not (resume or overwrite) and any(out.iterdir()):
         raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "
                               "or --overwrite to replace it")
+    return out
+
+
+def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool, overwrite: bool) -> dict[int, dict]:
+    """Check and prepare ``out``; return the finished episodes to keep (index -> entry).
+
+    Without ``resume`` or ``overwrite`` an existing non-empty ``out`` is refused; with
+    ``overwrite`` it is emptied; with ``resume`` the manifest's episodes whose files
+    verify are kept and everything else (unlisted or corrupt episode folders, temporary
+    folders of killed runs) is removed. Raises ValueError / FileExistsError before any work.
+    """
+    out = check_out(out, resume, overwrite)
+    existing = [p for p in out.iterdir()]
+    keep: dict[int, dict] = {}
     if overwrite:
         for p in existing:
             shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()

@@ -79,11 +79,11 @@ def _write_fs(path: Path, **mats) -> None:
 
 def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike) -> Path:
     """Write episode folder ``episode`` to ``out`` in the WILDTRACK layout (atomically); return ``out``."""
-    from pipeline.io import RenderDir, read_labels
-    from testbed.dataset import read_calibration
     import yaml
 
+    from pipeline.io import read_labels
     from scene import Scene
+    from testbed.dataset import read_calibration
 
     episode, out = Path(episode), Path(out)
     meta = json.loads((episode / "meta.json").read_text())

@@ -82,23 +82,24 @@ def build_config(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from testbed.generate import generate, prepare_output
+    from testbed.generate import check_out, generate, prepare_output
     from testbed.parallel import open_client
 
     config = build_config(args)
     out = Path(args.out)
-    keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
-    todo = args.episodes - len(keep)
-    if todo == 0:
-        print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
-        return 0
+    check_out(out, args.resume, args.overwrite)       # refuse before starting a cluster
     workers = args.workers
-    with open_client(workers, args.scheduler, worker_env={"LP_NUM_THREADS": "1"}) as client, \
-            tqdm(total=todo * args.frames, desc="render", unit="frame", file=sys.stderr,
-                 dynamic_ncols=True) as bar:
-        info = {"workers": workers, "scheduler": args.scheduler,
-                "progress": "per frame in-process, per episode (weighted by frames) on Dask"}
-        done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
+    with open_client(workers, args.scheduler, worker_env={"LP_NUM_THREADS": "1"}) as client:
+        keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
+        todo = args.episodes - len(keep)
+        if todo == 0:
+            print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
+            return 0
+        with tqdm(total=todo * args.frames, desc="render", unit="frame", file=sys.stderr,
+                  dynamic_ncols=True) as bar:
+            info = {"workers": workers, "scheduler": args.scheduler,
+                    "progress": "per frame in-process, per episode (weighted by frames) on Dask"}
+            done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
     print(f"wrote {len(done) - len(keep)} episodes x {args.frames} frames to {out} "
           f"({len(done)}/{args.episodes} finished)", file=sys.stderr)
     return 0

@@ -1,0 +1,55 @@
+"""camtask render: bad input gives one line and exit code 2 before any work starts."""
+
+import pytest
+
+from testbed.cli import main
+
+
+def run(capsys, *argv):
+    capsys.readouterr()
+    code = main(["render", *argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    return code, err[-1] if err else ""
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--episodes", "0"], "--episodes: expected an integer >= 1, got 0"),
+    (["--frames", "-1"], "--frames: expected an integer >= 1, got -1"),
+    (["--workers", "-2"], "--workers: expected an integer >= 0, got -2"),
+    (["--cameras", "3,99"], "--cameras: expected distinct camera numbers"),
+    (["--people", "17"], "expected at most 16"),
+])
+def test_bad_arguments(tmp_path, capsys, argv, message):
+    out = tmp_path / "out"
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", *argv)
+    assert code == 2 and line.startswith("camtask render: error: ") and message in line
+    assert not out.exists()
+
+
+def test_bad_scene_file(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("room: {width: -1}\n")
+    code, line = run(capsys, str(bad), "--out", str(tmp_path / "out"), "--workers", "0")
+    assert code == 2 and line.startswith("camtask render: error: scene: missing key")
+    assert not (tmp_path / "out").exists()
+
+
+def test_unwritable_output(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    code, line = run(capsys, "lab", "--out", str(tmp_path / "file" / "sub"), "--workers", "0")
+    assert code == 2 and "--out: cannot write to" in line
+
+
+def test_non_empty_output_is_refused(tmp_path, capsys):
+    out = tmp_path / "ds"
+    out.mkdir()
+    (out / "keep.txt").write_text("x")
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0")
+    assert code == 2 and "not empty" in line and "--resume" in line and "--overwrite" in line
+    assert (out / "keep.txt").read_text() == "x"
+
+
+def test_unreachable_scheduler(tmp_path, capsys):
+    code, line = run(capsys, "lab", "--out", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:9")
+    assert code == 2 and "cannot reach a Dask scheduler" in line
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

@@ -1,0 +1,157 @@
+"""camtask render datasets: layout, manifest checksums, same bytes for any worker count,
+resume after a kill, exact silhouettes, ground-truth hulls, lossless video, bad input."""
+
+import hashlib
+import json
+import shutil
+
+import numpy as np
+import pytest
+import shapely
+
+from testbed.cli import main
+from testbed.dataset import read_people
+
+pytestmark = pytest.mark.render
+
+ARGS = ["render", "lab", "--episodes", "2", "--frames", "2", "--seed", "4", "--cameras", "2,7,11"]
+
+
+def files_of(root):
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*"))
+            if p.is_file() and p.name != "run_info.json"}
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ds") / "data"
+    assert main(ARGS + ["--out", str(out), "--workers", "0"]) == 0
+    return out
+
+
+def test_layout_and_manifest(dataset, lab):
+    m = json.loads((dataset / "manifest.json").read_text())
+    assert [e["name"] for e in m["episodes"]] == ["episode_0000", "episode_0001"]
+    assert m["config"]["seed"] == 4 and m["config"]["frames"] == 2 and m["episodes_planned"] == 2
+    for e in m["episodes"]:
+        ep = dataset / e["name"]
+        assert e["frames"] == 2 and e["spawn_key"] == [e["index"]] and e["seed"] == 4
+        on_disk = sorted(p.relative_to(ep).as_posix() for p in ep.rglob("*") if p.is_file())
+        assert on_disk == sorted(e["files"])
+        for rel, digest in e["files"].items():
+            assert hashlib.sha256((ep / rel).read_bytes()).hexdigest() == digest
+        for sub in ("frames", "masks", "silhouettes"):
+            assert sorted(p.name for p in (ep / sub / "cam07").iterdir()) == ["000000.png", "000001.png"]
+        assert {"calibration/cam11.yaml", "background/cam02.png", "people.csv", "meta.json", "scanlines.npz",
+                "pipeline.yaml", "gt_hull.json"} <= set(e["files"])
+        with np.load(ep / "scanlines.npz") as z:
+            assert z["scanlines"].shape == z["gt_scanlines"].shape == (2, 3, 640)
+            assert z["scanlines"].dtype == bool and z["bearings"].shape == (3, 640)
+            assert z["camera_numbers"].tolist() == [2, 7, 11]
+    assert not list(dataset.glob(".*tmp"))
+    info = json.loads((dataset / "run_info.json").read_text())
+    assert "started" in info and "versions" in info
+    # different episodes walk differently
+    a, b = (read_people(dataset / n / "people.csv") for n in ("episode_0000", "episode_0001"))
+    assert not np.array_equal(a["x"], b["x"])
+
+
+def test_gt_hull_contains_every_person(dataset):
+    ep = dataset / "episode_0001"
+    hull = json.loads((ep / "gt_hull.json").read_text())
+    people = read_people(ep / "people.csv")
+    assert [f["frame"] for f in hull["frames"]] == [0, 1]
+    for rec in hull["frames"]:
+        polys = shapely.MultiPolygon([shapely.Polygon(p["exterior"], p["holes"]) for p in rec["polygons"]])
+        assert polys.area == pytest.approx(rec["area"], abs=1e-6)
+        for row in people[people["frame"] == rec["frame"]]:
+            assert polys.buffer(1e-6).contains(shapely.Point(row["x"], row["y"]))
+
+
+def test_silhouettes_equal_each_person_rendered_alone(dataset, lab):
+    import cv2
+
+    from testbed.episodes import _RENDERERS
+
+    (renderer,) = [r for k, r in _RENDERERS.items() if k[2] == (2, 7, 11)]
+    ep = dataset / "episode_0000"
+    people = read_people(ep / "people.csv")
+    for f in (0, 1):
+        rows = people[people["frame"] == f]
+        pos = np.column_stack([rows["x"], rows["y"]]).astype(float)
+        for n in (2, 7, 11):
+            sil = cv2.imread(str(ep / "silhouettes" / f"cam{n:02d}" / f"{f:06d}.png"), cv2.IMREAD_UNCHANGED)
+            labels = cv2.imread(str(ep / "masks" / f"cam{n:02d}" / f"{f:06d}.png"), cv2.IMREAD_UNCHANGED)
+            for i in range(len(pos)):
+                alone = np.full_like(pos, np.nan)
+                alone[i] = pos[i]
+                want = renderer.render(alone, cameras=[n], clean=True).labels[0] > 0
+                np.testing.assert_array_equal((sil >> i) & 1 == 1, want)
+                assert not ((labels == i + 1) & ~want).any()
+
+
+def test_silhouettes_exact_when_people_overlap(lab):
+    """Two people one behind the other: the occluded one's silhouette is still whole."""
+    from testbed.episodes import EpisodeConfig, _renderer, load_episode_scene, silhouettes
+
+    config = EpisodeConfig("lab", None, (2, 7, 11), 1, 0)
+    r = _renderer(config, load_episode_scene(config))
+    pos = np.array([[2.0, 2.0], [2.3, 2.9], [4.0, 4.0]])
+    fr = r.render(pos, clean=True)
+    sil = silhouettes(r, pos, fr.labels)
+    for i in range(3):
+        alone = np.full_like(pos, np.nan)
+        alone[i] = pos[i]
+        np.testing.assert_array_equal((sil >> i) & 1 == 1, r.render(alone, clean=True).labels > 0)
+    assert any(((sil >> i) & 1).sum() > (fr.labels == i + 1).sum() for i in range(3))   # someone is occluded
+
+
+def test_same_bytes_with_two_workers(dataset, tmp_path):
+    out = tmp_path / "two"
+    assert main(ARGS + ["--out", str(out), "--workers", "2"]) == 0
+    a, b = files_of(dataset), files_of(out)
+    assert sorted(a) == sorted(b)
+    assert [k for k in a if a[k] != b[k]] == []
+
+
+def test_resume_redoes_only_unfinished_episodes(dataset, tmp_path):
+    out = tmp_path / "killed"
+    shutil.copytree(dataset, out)
+    kept = out / "episode_0000" / "frames" / "cam02" / "000000.png"
+    before = kept.stat().st_mtime_ns
+    shutil.rmtree(out / "episode_0001")                       # killed before episode 1 was renamed...
+    shutil.copytree(out / "episode_0000", out / ".episode_0001.abcd.tmp")   # ...with its temp folder left
+    shutil.rmtree(out / ".episode_0001.abcd.tmp" / "masks")
+    assert main(ARGS + ["--out", str(out), "--workers", "0"]) == 2          # refused without --resume
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 0
+    assert kept.stat().st_mtime_ns == before                   # episode 0 was not redone
+    assert files_of(out) == files_of(dataset)
+    # a corrupt file is caught by its checksum and its episode redone
+    (out / "episode_0001" / "people.csv").write_text("garbage")
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 0
+    assert kept.stat().st_mtime_ns == before
+    assert files_of(out) == files_of(dataset)
+    # other arguments are refused
+    assert main(["render", "lab", "--episodes", "2", "--frames", "3", "--seed", "4", "--cameras", "2,7,11",
+                 "--out", str(out), "--workers", "0", "--resume"]) == 2
+
+
+def test_video_format_is_lossless(dataset, tmp_path):
+    import cv2
+
+    from testbed.lossless import read_video
+
+    out = tmp_path / "video"
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--format", "video", "--episodes", "1"]) == 0
+    ep, png = out / "episode_0000", dataset / "episode_0000"
+    assert not (ep / "frames" / "cam07").exists()
+    for n in (2, 7, 11):
+        frames = list(read_video(ep / "frames" / f"cam{n:02d}.mkv"))
+        assert len(frames) == 2
+        for f, rgb in enumerate(frames):
+            want = cv2.cvtColor(cv2.imread(str(png / "frames" / f"cam{n:02d}" / f"{f:06d}.png")), cv2.COLOR_BGR2RGB)
+            np.testing.assert_array_equal(rgb, want)
+    assert (ep / "masks" / "cam02" / "000001.png").read_bytes() == (png / "masks" / "cam02" / "000001.png").read_bytes()
+    again = tmp_path / "video2"
+    assert main(ARGS + ["--out", str(again), "--workers", "0", "--format", "video", "--episodes", "1"]) == 0
+    assert files_of(out) == files_of(again)
