@@ -139,8 +139,8 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     """Render the episodes not in ``keep`` into ``out``; return all finished entries.
 
     client : a ``distributed.Client`` or None (in this process, one episode after the other)
-    progress : called with a number of frames finished (per frame in-process, per
-        episode on Dask)
+    progress : called with a number of frames finished (per frame in-process; on Dask
+        from the frames in the workers' temporary folders, polled every 0.25 s)
     retries : Dask resubmits an episode whose worker died this many times
     The manifest is rewritten after every finished episode; on an error, the episodes
     finished so far stay listed and valid, and the error is re-raised.
@@ -166,12 +166,24 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
 
             futures = [client.submit(_remote_episode, config, i, str(out), key=f"episode-{i}-{os.getpid()}-{time.time_ns()}",
                                      pure=False, retries=retries) for i in todo]
+            shown = dict.fromkeys(todo, 0)          # frames counted per episode so far
+
+            def show(index: int, frames: int) -> None:
+                if progress is not None and frames > shown[index]:
+                    progress(frames - shown[index])
+                    shown[index] = frames
+
             try:
-                for fut in as_completed(futures):
-                    entry, host = fut.result()
-                    finished(entry, host)
-                    if progress is not None:
-                        progress(entry["frames"])
+                ac = as_completed(futures)
+                while not ac.is_empty():
+                    for fut in ac.next_batch(block=False):
+                        entry, host = fut.result()
+                        finished(entry, host)
+                        show(entry["index"], entry["frames"])
+                    for index, frames in frames_in_progress(out, config).items():
+                        if index in shown:
+                            show(index, min(frames, config.frames - 1))
+                    time.sleep(0.25)
             finally:
                 for f in futures:
                     f.cancel()
@@ -182,6 +194,20 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                  "episode_hosts": dict(sorted(hosts.items()))}
         write_json_atomic(out / RUN_INFO, info)
     return done
+
+
+def frames_in_progress(out: Path, config: EpisodeConfig) -> dict[int, int]:
+    """Frames written so far by the episodes being rendered: mask files of their first
+    camera in their temporary folders (``DIR/.episode_NNNN.*.tmp``), by episode index."""
+    counts: dict[int, int] = {}
+    for tmp in Path(out).glob(".episode_*.tmp"):
+        try:
+            index = int(tmp.name.split(".")[1].split("_")[1])
+            first = min((tmp / "masks").iterdir())
+            counts[index] = max(counts.get(index, 0), sum(1 for _ in first.iterdir()))
+        except (ValueError, IndexError, OSError):
+            continue
+    return counts
 
 
 def _remote_episode(config: EpisodeConfig, index: int, out: str) -> tuple[dict, str]:

@@ -34,7 +34,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--params", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=int, default=None,
-                   help="local worker processes (default: number of cores; 0 = in this process)")
+                   help="local worker processes (default: number of cores, at most --episodes; "
+                        "0 or a single episode = in this process)")
     g.add_argument("--scheduler", help="address of an existing Dask scheduler (DIR must be shared)")
     m = p.add_mutually_exclusive_group()
     m.add_argument("--resume", action="store_true", help="finish an interrupted run: keep verified episodes")
@@ -83,12 +84,16 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from testbed.generate import check_out, generate, prepare_output
-    from testbed.parallel import open_client
+    from testbed.parallel import default_workers, open_client
 
     config = build_config(args)
     out = Path(args.out)
     check_out(out, args.resume, args.overwrite)       # refuse before starting a cluster
     workers = args.workers
+    if workers is None and args.scheduler is None:
+        # one process per core, never more than there are episodes; one episode runs here
+        workers = min(default_workers(), args.episodes)
+        workers = 0 if workers == 1 else workers
     with open_client(workers, args.scheduler, worker_env={"LP_NUM_THREADS": "1"}) as client:
         keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
         todo = args.episodes - len(keep)
@@ -98,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         with tqdm(total=todo * args.frames, desc="render", unit="frame", file=sys.stderr,
                   dynamic_ncols=True) as bar:
             info = {"workers": workers, "scheduler": args.scheduler,
-                    "progress": "per frame in-process, per episode (weighted by frames) on Dask"}
+                    "progress": "frames, per frame in-process, polled from temporary folders on Dask"}
             done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
     print(f"wrote {len(done) - len(keep)} episodes x {args.frames} frames to {out} "
           f"({len(done)}/{args.episodes} finished)", file=sys.stderr)

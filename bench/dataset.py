@@ -1,0 +1,101 @@
+"""Frames per second of dataset generation (16 cameras, every output) against rendering alone.
+
+    .venv/bin/python bench/dataset.py [--frames 8] [--episodes 2] [--json]
+
+render_fps : ``Renderer.render`` alone (16 cameras, noise, labels) in one local Dask worker
+             process with LP_NUM_THREADS=1, after warm-up
+fps_1      : ``camtask render``'s generation (render + silhouettes + pipeline + ground truth
+             + hull + PNG writing + checksums + manifest) on 1 local worker, LP_NUM_THREADS=1,
+             ``--episodes`` episodes of ``--frames`` frames, after a warm-up episode
+fps_2      : the same with 2 workers and twice the episodes
+overhead   : render_fps / fps_1 - 1, the cost of writing and processing on top of rendering
+speedup    : fps_2 / fps_1
+Every figure is frames (of 16 cameras) per second of wall-clock time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path[0] = str(Path(__file__).resolve().parent.parent)
+
+ENV = {"LP_NUM_THREADS": "1"}
+
+
+def render_only(config, frames: int) -> float:
+    """Frames per second of rendering alone, in a worker (renderer from the episode cache)."""
+    import numpy as np
+
+    from testbed.episode import walk
+    from testbed.episodes import _renderer, load_episode_scene
+
+    scene = load_episode_scene(config)
+    r = _renderer(config, scene)
+    rng = np.random.default_rng(0)
+    track = walk(scene, frames + 2, rng)
+    for f in range(2):
+        r.render(track[f], rng=rng)
+    t = time.perf_counter()
+    for f in range(2, frames + 2):
+        r.render(track[f], rng=rng)
+    return frames / (time.perf_counter() - t)
+
+
+def generation_fps(client, config, episodes: int, workers: int, root: Path) -> float:
+    from testbed.generate import generate
+
+    warm = root / f"warm{workers}"
+    warm.mkdir()
+    generate(config, workers, warm, {}, client)                   # one episode per worker: renderers, maps
+    out = root / f"timed{workers}"
+    out.mkdir()
+    t = time.perf_counter()
+    generate(config, episodes, out, {}, client)
+    return episodes * config.frames / (time.perf_counter() - t)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--frames", type=int, default=8, help="frames per episode (default 8)")
+    p.add_argument("--episodes", type=int, default=2, help="episodes per worker (default 2)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    args = p.parse_args(argv)
+
+    from pipeline import load_params
+    from testbed.episodes import EpisodeConfig
+    from testbed.parallel import open_client
+
+    config = EpisodeConfig("lab", None, None, args.frames, 0, "png", load_params().to_dict())
+    root = Path(tempfile.mkdtemp(prefix="bench-dataset."))
+    try:
+        with open_client(1, worker_env=ENV) as client:
+            render_fps = client.submit(render_only, config, 2 * args.frames, pure=False).result()
+            fps_1 = generation_fps(client, config, args.episodes, 1, root)
+        with open_client(2, worker_env=ENV) as client:
+            fps_2 = generation_fps(client, config, 2 * args.episodes, 2, root)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+    out = {"cameras": 16, "frames_per_episode": args.frames, "episodes_per_worker": args.episodes,
+           "render_fps": round(render_fps, 3), "fps_1": round(fps_1, 3), "fps_2": round(fps_2, 3),
+           "overhead": round(render_fps / fps_1 - 1, 3), "speedup": round(fps_2 / fps_1, 2),
+           "cpus": len(os.sched_getaffinity(0)), "load_average": [round(x, 2) for x in os.getloadavg()]}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"16 cameras, {args.frames} frames per episode, LP_NUM_THREADS=1 per worker, {out['cpus']} cpus, "
+              f"load {out['load_average']}")
+        print(f"rendering alone, 1 worker : {out['render_fps']:.2f} frames/s")
+        print(f"generation,      1 worker : {out['fps_1']:.2f} frames/s  (writing + processing +{out['overhead']:.0%})")
+        print(f"generation,      2 workers: {out['fps_2']:.2f} frames/s  ({out['speedup']:.2f}x one worker)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
