@@ -40,6 +40,8 @@ def add_arguments(p) -> None:
     p.add_argument("--m", type=int, default=1, help="cameras swapped per update (default 1)")
     p.add_argument("--radius", type=float, default=0.1, help="disc radius (default 0.1)")
     p.add_argument("--speed", type=float, default=SPEED, help=f"walking speed per second (default {SPEED})")
+    p.add_argument("--feedback", choices=("hull", "tracks"), default="hull",
+                   help="estimates for tasking: previous hull centres (paper) or confirmed tracks")
 
 
 def parse(args) -> dict:
@@ -60,7 +62,8 @@ def parse(args) -> dict:
     if args.speed <= 0:
         raise ValueError(f"--speed: expected a number > 0, got {args.speed}")
     return {"pairs": pairs, "objects": args.objects, "steps": args.steps,
-            "update_every": args.update_every, "m": args.m, "radius": args.radius, "speed": args.speed}
+            "update_every": args.update_every, "m": args.m, "radius": args.radius, "speed": args.speed,
+            "feedback": args.feedback}
 
 
 def tracker_params(radius: float, speed: float) -> TrackerParams:
@@ -92,9 +95,12 @@ def run_episode(tasker: str, k: int, opts: dict, seed: int, trial: int) -> dict:
         ids, est = tracker.step(centres)
         track_ids.append(ids)
         track_xy.append(est)
-        if tasker != "uniform" and (t + 1) % opts["update_every"] == 0 and len(centres):
+        estimates = centres
+        if opts.get("feedback") == "tracks" and len(tracker.estimates()):
+            estimates = tracker.estimates()
+        if tasker != "uniform" and (t + 1) % opts["update_every"] == 0 and len(estimates):
             current = chosen if tasker == "incremental" else None
-            chosen = core.choose_cameras(tasker, k, xy, yaw, core.FOV, centres, r, room,
+            chosen = core.choose_cameras(tasker, k, xy, yaw, core.FOV, estimates, r, room,
                                          current=current, m=opts["m"])
     gt_ids = [np.arange(opts["objects"])] * opts["steps"]
     metrics = tracking_metrics(gt_ids, list(truth), track_ids, track_xy, max_distance=params.gate)
