@@ -9,6 +9,16 @@ vertex colour, interpolated across the triangle; alpha is the exact label (perso
 index + 1, 0 for the room), written from a ``flat`` varying. No lighting, no MSAA, no
 blending, no face culling.
 
+:meth:`Rasteriser.draw` draws everything (the room, the benchmark floor, the tests'
+reference). The renderer's steps use :meth:`Rasteriser.draw_people`: a copy of the
+room's colour and depth (:meth:`Rasteriser.store_room`, taken once) is blitted into
+each person's canvas box, only the people's triangles (the tail of the vertex buffer)
+are drawn, and only those boxes are read. Starting from the room's own depth buffer
+makes it exact: a person fragment passes or fails exactly as in a whole-scene draw,
+including the floor-level pixels of the feet where the person and the floor tie in
+24-bit depth (there the floor, drawn first, wins under ``GL_LESS``); a plain clear
+instead of the room's depth got ~2 such pixels per 16-camera step wrong.
+
 The context comes from :func:`render.gl.context` (one per process, shared).
 """
 
@@ -65,6 +75,11 @@ class Rasteriser:
         self.width, self.height, self.n_tiles = int(width), int(height), int(n_tiles)
         self.n_people = int(n_people)
         self.n_vertices = len(mesh.positions)
+        room = np.asarray(mesh.person) < 0
+        self.people_first = int(np.argmin(room)) if not room.all() else self.n_vertices
+        if room[self.people_first:].any():
+            raise ValueError("mesh: expected the room's vertices first, then the people's")
+        self.room_fbo = None                        # the room alone (colour + depth), see store_room
         self._objects = {}
         self._build_program(GL)
         self._build_buffers(GL, mesh)
@@ -142,20 +157,8 @@ class Rasteriser:
         b0 = int(bands[0])
         consecutive = np.array_equal(bands, np.arange(b0, b0 + n))
         gl.context(self.backend)
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
-        GL.glUseProgram(self.program)
-        GL.glBindVertexArray(self.vao)
-        GL.glDisable(GL.GL_BLEND)
-        GL.glDisable(GL.GL_CULL_FACE)
-        GL.glDisable(GL.GL_MULTISAMPLE)
-        GL.glDisable(GL.GL_DITHER)
-        GL.glEnable(GL.GL_DEPTH_TEST)
-        GL.glDepthFunc(GL.GL_LESS)
-        GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
-        if self.n_people:
-            off = np.asarray(offsets_xy, np.float32).reshape(self.n_people, 2).copy()
-            off[~np.isfinite(off).all(axis=1)] = HIDDEN
-            GL.glUniform2fv(self._u_offsets, self.n_people, off)
+        self._state(GL)
+        self._set_offsets(GL, offsets_xy)
         GL.glClearColor(0.0, 0.0, 0.0, 0.0)
         if consecutive and n == self.n_tiles:
             GL.glDisable(GL.GL_SCISSOR_TEST)
@@ -189,6 +192,120 @@ class Rasteriser:
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
         return out
 
+    def _state(self, GL) -> None:
+        """The fixed pipeline state of every pass (bound program, VAO and framebuffer)."""
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
+        GL.glUseProgram(self.program)
+        GL.glBindVertexArray(self.vao)
+        GL.glDisable(GL.GL_BLEND)
+        GL.glDisable(GL.GL_CULL_FACE)
+        GL.glDisable(GL.GL_MULTISAMPLE)
+        GL.glDisable(GL.GL_DITHER)
+        GL.glEnable(GL.GL_DEPTH_TEST)
+        GL.glDepthFunc(GL.GL_LESS)
+        GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
+
+    def _set_offsets(self, GL, offsets_xy) -> None:
+        if self.n_people:
+            off = np.asarray(offsets_xy, np.float32).reshape(self.n_people, 2).copy()
+            off[~np.isfinite(off).all(axis=1)] = HIDDEN
+            GL.glUniform2fv(self._u_offsets, self.n_people, off)
+
+    def store_room(self) -> None:
+        """Keep a copy of the whole framebuffer (colour and depth) as the room.
+
+        Call it right after a :meth:`draw` of every band with every person hidden: then
+        :meth:`draw_people` can start from the room's exact colour and depth in any band.
+        """
+        GL = self.GL
+        gl.context(self.backend)
+        full_height = self.height * self.n_tiles
+        if self.room_fbo is None:
+            self.room_fbo = GL.glGenFramebuffers(1)
+            GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.room_fbo)
+            self.room_colour = GL.glGenRenderbuffers(1)
+            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self.room_colour)
+            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_RGBA8, self.width, full_height)
+            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_RENDERBUFFER,
+                                         self.room_colour)
+            self.room_depth = GL.glGenRenderbuffers(1)
+            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self.room_depth)
+            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_DEPTH_COMPONENT24, self.width, full_height)
+            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_DEPTH_ATTACHMENT, GL.GL_RENDERBUFFER,
+                                         self.room_depth)
+            status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+            if status != GL.GL_FRAMEBUFFER_COMPLETE:
+                raise RuntimeError(f"OpenGL framebuffer incomplete (status 0x{int(status):x})")
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self.fbo)
+        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, self.room_fbo)
+        GL.glDisable(GL.GL_SCISSOR_TEST)
+        GL.glBlitFramebuffer(0, 0, self.width, full_height, 0, 0, self.width, full_height,
+                             GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+
+    def draw_people(self, view_projs: np.ndarray, offsets_xy: np.ndarray, bands, rects,
+                    out: np.ndarray) -> None:
+        """Draw only the people over the stored room, inside ``rects``, and read those back.
+
+        view_projs : (n, 4, 4) float, projection @ view per camera
+        offsets_xy : (n_people, 2) float, metres (NaN rows: hidden)
+        bands : (n,) distinct ints, each camera's framebuffer band (as in :meth:`draw`)
+        rects : n sequences of canvas rectangles (x0, y0, x1, y1), ints, end exclusive,
+            rows top first, within the canvas; a camera without one is skipped (nothing
+            drawn, nothing read)
+        out : (n_tiles, H, W, 4) uint8, C-contiguous; each of band b's rectangles is read
+            into ``out[b, y0:y1, x0:x1]``, the rest of ``out`` is left alone
+
+        Per camera: the room's colour and depth are copied (``glBlitFramebuffer``) from
+        the stored room into each rectangle, then only the people's triangles are drawn.
+        Every person fragment meets exactly the depth buffer it meets in a whole-scene
+        :meth:`draw` (the room's, then the people drawn before it), so inside the
+        rectangles the pixels are those of the whole-scene draw, bit for bit, provided
+        the rectangles hold every pixel the people cover. Requires :meth:`store_room`.
+        """
+        if self.room_fbo is None:
+            raise RuntimeError("draw_people: store_room() first")
+        GL = self.GL
+        bands = np.asarray(bands, int).reshape(-1)
+        if not len(view_projs) == len(bands) == len(rects):
+            raise ValueError(f"view_projs, bands, rects: expected one per camera, got "
+                             f"{len(view_projs)}, {len(bands)}, {len(rects)}")
+        if out.shape != self.pixels.shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
+            raise ValueError(f"out: expected a C-contiguous uint8 array of shape {self.pixels.shape}")
+        todo = [k for k in range(len(bands)) if len(rects[k])]
+        if not todo:
+            return
+        gl.context(self.backend)
+        H = self.height
+        GL.glDisable(GL.GL_SCISSOR_TEST)
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self.room_fbo)
+        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, self.fbo)
+        for k in todo:
+            b = int(bands[k]) * H
+            for x0, y0, x1, y1 in rects[k]:
+                GL.glBlitFramebuffer(x0, b + y0, x1, b + y1, x0, b + y0, x1, b + y1,
+                                     GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
+        self._state(GL)
+        self._set_offsets(GL, offsets_xy)
+        vp = np.ascontiguousarray(view_projs, np.float32)
+        count = self.n_vertices - self.people_first
+        for k in todo:
+            GL.glViewport(0, int(bands[k]) * H, self.width, H)
+            GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, vp[k])
+            GL.glDrawArrays(GL.GL_TRIANGLES, self.people_first, count)
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, self.width)
+        GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
+        try:
+            for k in todo:
+                b = int(bands[k])
+                for x0, y0, x1, y1 in rects[k]:
+                    GL.glReadPixels(x0, b * H + y0, x1 - x0, y1 - y0, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE,
+                                    out[b, y0, x0:].ctypes.data)
+        finally:
+            GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, 0)
+            GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+
     def close(self) -> None:
         """Free this rasteriser's GL objects (the shared context stays)."""
         if getattr(self, "program", None) is None:
@@ -197,6 +314,9 @@ class Rasteriser:
         try:
             gl.context(self.backend)
             GL.glDeleteFramebuffers(1, [self.fbo])
+            if self.room_fbo is not None:
+                GL.glDeleteFramebuffers(1, [self.room_fbo])
+                GL.glDeleteRenderbuffers(2, [self.room_colour, self.room_depth])
             GL.glDeleteRenderbuffers(1, [self.depth_rb])
             GL.glDeleteTextures([self.canvas_tex])
             GL.glDeleteBuffers(1, [self.vbo])

@@ -70,9 +70,12 @@ class Renderer:
     cameras : 1-based camera numbers to prepare (default: all)
     lighting : the light baked into the vertex colours
 
-    One OpenGL pass draws every camera's ideal pinhole image (RGB and labels together)
-    on a canvas slightly larger than the image (labels in the alpha channel);
-    ``cv2.remap`` applies each camera's lens distortion (bilinear for RGB, nearest for
+    Every camera's ideal pinhole image (RGB and labels together) lives on a canvas
+    slightly larger than the image (labels in the alpha channel). The empty room is drawn
+    once and cached (canvases, distorted frames, and its colour + depth in GL); a step
+    draws only the people's triangles, over the room's colour and depth copied into each
+    person's canvas box, and reads back only those boxes (bit-identical to drawing the
+    whole scene). ``cv2.remap`` applies each camera's lens distortion (bilinear for RGB, nearest for
     labels) only inside the regions the people can change, the rest of each frame being
     the cached distorted background (bit-identical to remapping everything); then the
     per-frame gain and the pooled sensor noise (:mod:`render.noise`). docs/render.md.
@@ -121,6 +124,7 @@ class Renderer:
         self._alpha = np.zeros((ch, cw), np.uint8)                      # idem, kept all 0
         self._pool = None
         self._background = None
+        self._canvas = self._work = None            # (n_cams, ch, cw, 4), with the background
 
     # -- context manager -------------------------------------------------------------
     def __enter__(self) -> Renderer:
@@ -169,14 +173,33 @@ class Renderer:
         rgb = np.empty((n, H, W, 3), np.uint8)
         labels = np.zeros((n, H, W), np.uint8)
 
-        canvases = self.raster.draw(self.view_projs[idx], pos, bands=idx)
-        for k, i in enumerate(idx):
-            noise = None if pool is None else pool[offsets[k]:offsets[k] + H * W * 3].reshape(H, W * 3)
-            self._finish(int(i), canvases[k], rects[k], regions[k], background.rgb[i], rgb[k], labels[k],
-                         None if clean else gains[k], noise)
+        boxes = [_boxes(r, self.canvas_size) for r in rects]
+        work = self._work
+        try:
+            self._draw_people(idx, pos, boxes)
+            for k, i in enumerate(idx):
+                noise = None if pool is None else pool[offsets[k]:offsets[k] + H * W * 3].reshape(H, W * 3)
+                self._finish(int(i), work[i], boxes[k], regions[k], background.rgb[i], rgb[k], labels[k],
+                             None if clean else gains[k], noise)
+        finally:                                    # the work canvases are the room again
+            for k, i in enumerate(idx):
+                for x0, y0, x1, y1 in boxes[k]:
+                    work[i, y0:y1, x0:x1] = self._canvas[i, y0:y1, x0:x1]
         return Frames(rgb, labels, tuple(self.numbers[i] for i in idx))
 
-    def _finish(self, i: int, canvas: np.ndarray, rects: np.ndarray, regions: list, background: np.ndarray,
+    def _draw_people(self, idx: np.ndarray, pos: np.ndarray, boxes: list) -> None:
+        """Draw the people over the room inside their canvas ``boxes``, into ``self._work``.
+
+        boxes : per camera, the integer slice bounds (x0, y0, x1, y1), end exclusive, of
+            each visible person's canvas box (:func:`_boxes` of :meth:`_rects`)
+        Afterwards ``self._work[i]`` is camera ``i = idx[k]``'s whole-scene canvas: the
+        cached room canvas outside ``boxes[k]``, inside the people drawn over the room's
+        own colour and depth (:meth:`Rasteriser.draw_people`), bit for bit what a
+        whole-scene draw gives. The caller restores the boxes from ``self._canvas``.
+        """
+        self.raster.draw_people(self.view_projs[idx], pos, idx, boxes, self._work)
+
+    def _finish(self, i: int, canvas: np.ndarray, boxes: list, regions: list, background: np.ndarray,
                 rgb: np.ndarray, labels: np.ndarray, gain: float | None, noise: np.ndarray | None) -> None:
         """Camera ``i``'s distorted frame and labels from its canvas, into ``rgb`` and ``labels``.
 
@@ -189,14 +212,15 @@ class Renderer:
         np.copyto(rgb, background)
         if regions:
             scratch, alpha = self._rgba, self._alpha
-            x0, y0, x1, y1 = _union(rects, self.canvas_size)
-            cv2.extractChannel(canvas[y0:y1, x0:x1], 3, dst=alpha[y0:y1, x0:x1])
+            for x0, y0, x1, y1 in boxes:            # the labels; 0 outside the boxes
+                cv2.extractChannel(canvas[y0:y1, x0:x1], 3, dst=alpha[y0:y1, x0:x1])
             for r0, r1, c0, c1 in regions:
                 rgba = scratch[:r1 - r0, :c1 - c0]
                 distort_region(canvas, m, (r0, r1, c0, c1), rgba)
                 cv2.cvtColor(rgba, cv2.COLOR_RGBA2RGB, dst=rgb[r0:r1, c0:c1])
                 distort_region(alpha, m, (r0, r1, c0, c1), labels[r0:r1, c0:c1], nearest=True)
-            alpha[y0:y1, x0:x1] = 0                 # outside the rects the canvas alpha is 0
+            for x0, y0, x1, y1 in boxes:
+                alpha[y0:y1, x0:x1] = 0             # outside the boxes the canvas alpha is 0
         if gain is not None:
             flat = rgb.reshape(H, W * 3)
             sense(flat, flat, gain, noise)
@@ -248,6 +272,10 @@ class Renderer:
             hidden = np.full((self.scene.people.count, 2), np.nan)
             all_idx = np.arange(len(self.numbers))
             canvases = self.raster.draw(self.view_projs, hidden, bands=all_idx)
+            self.raster.store_room()                # the room's colour and depth, in GL
+            self._canvas = canvases.copy()          # the room's ideal canvases (read-only)
+            self._canvas.flags.writeable = False
+            self._work = canvases.copy()            # the canvases render() draws people into
             rgb, labels = self._distort(canvases, all_idx)
             self._background = Frames(rgb, labels, self.numbers)
         return self._background
@@ -282,13 +310,16 @@ class Renderer:
         return rgb, labels
 
 
-def _union(rects, canvas_size) -> tuple[int, int, int, int]:
-    """Integer canvas slice bounds (x0, y0, x1, y1), end exclusive, of the union of ``rects``."""
+def _boxes(rects, canvas_size) -> list[tuple[int, int, int, int]]:
+    """Integer canvas slice bounds (x0, y0, x1, y1), end exclusive, of each non-NaN rect.
+
+    rects : (k, 4) float, inclusive bounds, +-inf beyond the canvas edges, NaN rows: none
+    """
     cw, ch = canvas_size
     r = rects[~np.isnan(rects).any(axis=1)]
-    x0, y0 = np.clip(r[:, :2].min(axis=0), 0, [cw, ch])
-    x1, y1 = np.clip(r[:, 2:].max(axis=0) + 1, 0, [cw, ch])
-    return int(x0), int(y0), int(x1), int(y1)
+    lo = np.clip(r[:, :2], 0, [cw, ch])
+    hi = np.clip(r[:, 2:] + 1, 0, [cw, ch])
+    return [(int(a), int(b), int(c), int(d)) for (a, b), (c, d) in zip(lo, hi) if c > a and d > b]
 
 
 def _maps(cameras) -> tuple[list[DistortionMaps], np.ndarray]:
