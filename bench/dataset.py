@@ -1,6 +1,6 @@
 """Frames per second of dataset generation (16 cameras, every output) against rendering alone.
 
-    .venv/bin/python bench/dataset.py [--frames 8] [--episodes 2] [--json]
+    .venv/bin/python bench/dataset.py [--frames 8] [--episodes 2] [--format png|video] [--json]
 
 render_fps : ``Renderer.render`` alone (16 cameras, noise, labels) in one local Dask worker
              process with LP_NUM_THREADS=1, after warm-up
@@ -10,6 +10,9 @@ fps_1      : ``camtask render``'s generation (render + silhouettes + pipeline + 
 fps_2      : the same with 2 workers and twice the episodes
 overhead   : render_fps / fps_1 - 1, the cost of writing and processing on top of rendering
 speedup    : fps_2 / fps_1
+stage_ms_per_frame_1 : where the 1-worker time goes (run_info.json's episode_seconds):
+             render, silhouettes, write (PNG or video), pipeline (scanlines + ground
+             truth), hull, finish (per-episode setup, people.csv, npz, checksums, rename)
 Every figure is frames (of 16 cameras) per second of wall-clock time.
 """
 
@@ -58,13 +61,20 @@ def generation_fps(client, config, episodes: int, workers: int, root: Path) -> f
     out.mkdir()
     t = time.perf_counter()
     generate(config, episodes, out, {}, client)
-    return episodes * config.frames / (time.perf_counter() - t)
+    fps = episodes * config.frames / (time.perf_counter() - t)
+    stages: dict = {}
+    for secs in json.loads((out / "run_info.json").read_text())["episode_seconds"].values():
+        for k, v in secs.items():
+            stages[k] = stages.get(k, 0.0) + v
+    per_frame_ms = {k: round(1e3 * v / (episodes * config.frames), 1) for k, v in sorted(stages.items())}
+    return fps, per_frame_ms
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--frames", type=int, default=8, help="frames per episode (default 8)")
     p.add_argument("--episodes", type=int, default=2, help="episodes per worker (default 2)")
+    p.add_argument("--format", choices=("png", "video"), default="png", help="frame format (default png)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     args = p.parse_args(argv)
 
@@ -72,20 +82,20 @@ def main(argv=None) -> int:
     from testbed.episodes import EpisodeConfig
     from testbed.parallel import open_client
 
-    config = EpisodeConfig("lab", None, None, args.frames, 0, "png", load_params().to_dict())
+    config = EpisodeConfig("lab", None, None, args.frames, 0, args.format, load_params().to_dict())
     root = Path(tempfile.mkdtemp(prefix="bench-dataset."))
     try:
         with open_client(1, worker_env=ENV) as client:
             render_fps = client.submit(render_only, config, 2 * args.frames, pure=False).result()
-            fps_1 = generation_fps(client, config, args.episodes, 1, root)
+            fps_1, ms_1 = generation_fps(client, config, args.episodes, 1, root)
         with open_client(2, worker_env=ENV) as client:
-            fps_2 = generation_fps(client, config, 2 * args.episodes, 2, root)
+            fps_2, _ = generation_fps(client, config, 2 * args.episodes, 2, root)
     finally:
         shutil.rmtree(root, ignore_errors=True)
-    out = {"cameras": 16, "frames_per_episode": args.frames, "episodes_per_worker": args.episodes,
+    out = {"cameras": 16, "format": args.format, "frames_per_episode": args.frames, "episodes_per_worker": args.episodes,
            "render_fps": round(render_fps, 3), "fps_1": round(fps_1, 3), "fps_2": round(fps_2, 3),
            "overhead": round(render_fps / fps_1 - 1, 3), "speedup": round(fps_2 / fps_1, 2),
-           "cpus": len(os.sched_getaffinity(0)), "load_average": [round(x, 2) for x in os.getloadavg()]}
+           "stage_ms_per_frame_1": ms_1, "cpus": len(os.sched_getaffinity(0)), "load_average": [round(x, 2) for x in os.getloadavg()]}
     if args.json:
         print(json.dumps(out))
     else:
@@ -93,6 +103,7 @@ def main(argv=None) -> int:
               f"load {out['load_average']}")
         print(f"rendering alone, 1 worker : {out['render_fps']:.2f} frames/s")
         print(f"generation,      1 worker : {out['fps_1']:.2f} frames/s  (writing + processing +{out['overhead']:.0%})")
+        print("generation stages, 1 worker, ms per frame:", ms_1)
         print(f"generation,      2 workers: {out['fps_2']:.2f} frames/s  ({out['speedup']:.2f}x one worker)")
     return 0
 

@@ -22,6 +22,7 @@ import json
 import os
 import shutil
 import tempfile
+import time
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -180,11 +181,16 @@ def hull_record(frame: int, hull) -> dict:
                          for p in polys]}
 
 
-def render_episode(config: EpisodeConfig, index: int, out: str, progress=None) -> dict:
+def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
+                   seconds: dict | None = None) -> dict:
     """Render, process and write episode ``index`` into ``out/episode_NNNN``; return its manifest entry.
 
     progress : optional callable(frames_done_since_last_call) for in-process progress bars
+    seconds : optional dict, filled with the wall-clock seconds spent per stage (render,
+        silhouettes, write, pipeline, hull, finish) - for run_info.json, never the manifest
     """
+    seconds = {} if seconds is None else seconds
+    start = time.perf_counter()
     from pipeline import PipelineParams
     from pipeline.runs import make_pipeline
     from tasking.hull import visual_hull_of_scanlines
@@ -226,8 +232,11 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None) -
         rows, scans, gts, hulls = [], [], [], []
         try:
             for f in range(config.frames):
+                t0 = time.perf_counter()
                 fr = renderer.render(track[f], rng=sensor_rng)
+                t1 = time.perf_counter()
                 sil = silhouettes(renderer, track[f], fr.labels)
+                t2 = time.perf_counter()
                 fname = frame_name(f)
                 for k, c in enumerate(cameras):
                     if videos:
@@ -236,12 +245,18 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None) -
                         write_png(tmp / "frames" / c.name / fname, fr.rgb[k])
                     write_png(tmp / "masks" / c.name / fname, fr.labels[k])
                     write_png(tmp / "silhouettes" / c.name / fname, sil[k])
+                t3 = time.perf_counter()
                 scans.append(pipe.process(fr.rgb))
                 gt = pipe.ground_truth(fr.labels)[1]
                 gts.append(gt)
+                t4 = time.perf_counter()
                 hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room)))
                 for pid, (x, y) in enumerate(np.asarray(track[f], float)):
                     rows.append((f, pid, repr(float(x)), repr(float(y)), people.radius, people.height))
+                t5 = time.perf_counter()
+                for key, dt in (("render", t1 - t0), ("silhouettes", t2 - t1), ("write", t3 - t2),
+                                ("pipeline", t4 - t3), ("hull", t5 - t4)):
+                    seconds[key] = seconds.get(key, 0.0) + dt
                 if progress is not None:
                     progress(1)
         finally:
@@ -268,6 +283,8 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None) -
         }
         (tmp / "meta.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
         files = checksums(tmp)
+        seconds["total"] = time.perf_counter() - start
+        seconds["finish"] = seconds["total"] - sum(v for k, v in seconds.items() if k != "total")
         final = out / name
         if final.exists():                       # a retried task whose first run got this far
             shutil.rmtree(final)

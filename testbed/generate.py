@@ -151,16 +151,20 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     info = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "host": socket.gethostname(),
             "versions": versions(), "argv": sys.argv[1:]} | (run_info or {})
     hosts: dict[str, str] = {}
+    stages: dict[str, dict] = {}
 
-    def finished(entry: dict, host: str) -> None:
+    def finished(entry: dict, host: str, secs: dict) -> None:
         done[entry["index"]] = entry
         hosts[entry["name"]] = host
+        stages[entry["name"]] = {k: round(v, 3) for k, v in sorted(secs.items())}
         write_json_atomic(out / MANIFEST, manifest(config, episodes, done))
 
     try:
         if client is None:
             for i in todo:
-                finished(render_episode(config, i, str(out), progress), socket.gethostname())
+                secs: dict = {}
+                entry = render_episode(config, i, str(out), progress, secs)
+                finished(entry, socket.gethostname(), secs)
         else:
             from distributed import as_completed
 
@@ -177,8 +181,8 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                 ac = as_completed(futures)
                 while not ac.is_empty():
                     for fut in ac.next_batch(block=False):
-                        entry, host = fut.result()
-                        finished(entry, host)
+                        entry, host, secs = fut.result()
+                        finished(entry, host, secs)
                         show(entry["index"], entry["frames"])
                     for index, frames in frames_in_progress(out, config).items():
                         if index in shown:
@@ -191,7 +195,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
         for p in out.glob(".episode_*.tmp"):        # left behind by workers that died
             shutil.rmtree(p, ignore_errors=True)
         info |= {"finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "episodes_done": len(done),
-                 "episode_hosts": dict(sorted(hosts.items()))}
+                 "episode_hosts": dict(sorted(hosts.items())), "episode_seconds": dict(sorted(stages.items()))}
         write_json_atomic(out / RUN_INFO, info)
     return done
 
@@ -210,5 +214,6 @@ def frames_in_progress(out: Path, config: EpisodeConfig) -> dict[int, int]:
     return counts
 
 
-def _remote_episode(config: EpisodeConfig, index: int, out: str) -> tuple[dict, str]:
-    return render_episode(config, index, out), socket.gethostname()
+def _remote_episode(config: EpisodeConfig, index: int, out: str) -> tuple[dict, str, dict]:
+    seconds: dict = {}
+    return render_episode(config, index, out, seconds=seconds), socket.gethostname(), seconds
