@@ -9,6 +9,8 @@ fps_1      : ``camtask render``'s generation (render + silhouettes + pipeline + 
              ``--episodes`` episodes of ``--frames`` frames, after a warm-up episode
 fps_2      : the same with 2 workers and twice the episodes
 overhead   : render_fps / fps_1 - 1, the cost of writing and processing on top of rendering
+overhead_same_run : the same from the 1-worker generation's own stage times (total / render
+             - 1): immune to load changing between the measurements
 speedup    : fps_2 / fps_1
 stage_ms_per_frame_1 : where the 1-worker time goes (run_info.json's episode_seconds):
              render, silhouettes, write (PNG or video), pipeline (scanlines + ground
@@ -94,7 +96,8 @@ def main(argv=None) -> int:
         shutil.rmtree(root, ignore_errors=True)
     out = {"cameras": 16, "format": args.format, "frames_per_episode": args.frames, "episodes_per_worker": args.episodes,
            "render_fps": round(render_fps, 3), "fps_1": round(fps_1, 3), "fps_2": round(fps_2, 3),
-           "overhead": round(render_fps / fps_1 - 1, 3), "speedup": round(fps_2 / fps_1, 2),
+           "overhead": round(render_fps / fps_1 - 1, 3),
+           "overhead_same_run": round(ms_1["total"] / ms_1["render"] - 1, 2), "speedup": round(fps_2 / fps_1, 2),
            "stage_ms_per_frame_1": ms_1, "cpus": len(os.sched_getaffinity(0)), "load_average": [round(x, 2) for x in os.getloadavg()]}
     if args.json:
         print(json.dumps(out))
