@@ -50,6 +50,7 @@ __all__ = [
     "naive_greedy_select",
     "optimal_select",
     "greedy_remove",
+    "greedy_remove_reference",
     "incremental_select",
     "IncrementalTasker",
 ]
@@ -135,13 +136,16 @@ def greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones=None
     return chosen, h
 
 
-def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones=None):
+def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones=None,
+                       final_hull: bool = True):
     """Lazy (CELF) greedy: the same choice as :func:`greedy_select`, fewer evaluations.
 
     Stale gains are upper bounds (submodularity). A freshly evaluated camera is taken
     only when every stale bound is below its gain by more than ``LAZY_TOL * room.area``;
     stale cameras within that margin are re-evaluated first, so floating-point noise
-    cannot change the choice. Same parameters and returns as :func:`greedy_select`.
+    cannot change the choice. Same parameters and returns as :func:`greedy_select`;
+    with ``final_hull=False`` the last round's difference is skipped and the returned
+    hull is None (the incremental step only needs the choice).
     """
     wedges = np.asarray(wedges, dtype=object)
     gain = Gains(wedges, cones)
@@ -176,8 +180,8 @@ def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones
             if not stale:
                 break
             heapq.heappush(heap, (neg, c, stamp))
-        h = h.difference(wedges[c])
         chosen.append(c)
+        h = h.difference(wedges[c]) if final_hull or rnd < k - 1 else None
     return chosen, h
 
 
@@ -210,17 +214,62 @@ def optimal_select(wedges, room: Polygon, k: int) -> list:
     return optimal_subset(coverage_cells(wedges, room), k)
 
 
+def _first_min(areas, tol: float) -> int:
+    """Lowest index whose value is within ``tol`` of the minimum (ties: lowest index)."""
+    areas = np.asarray(areas, dtype=float)
+    return int(np.flatnonzero(areas <= areas.min() + tol)[0])
+
+
 def greedy_remove(wedges, room: Polygon, current, m: int):
     """Remove m cameras one at a time, each time the one whose removal grows the hull least.
 
-    Hulls without each camera come from prefix and suffix hulls of the current set:
-    ``hull(S - s_i) = P_{i-1} ∩ Q_{i+1}``, 3|S| operations per removal.
+    Hulls without each camera come from prefix and suffix hulls of the current set,
+    ``hull(S - s_i) = P_{i-1} ∩ Q_{i+1}``, built only as far as needed: the prefix
+    ``P_{k-1}`` and suffix ``Q_1`` are already the hulls without the last and the first
+    camera, so a removal costs ``3|S| - 4`` overlays (the reference builds ``3|S|``).
+    Areas within ``LAZY_TOL * room.area`` of the smallest count as tied and the lowest
+    index wins, so overlay rounding cannot change the choice.
 
     Returns
     -------
     kept : list of ints (ascending), removed : list of m ints, hull : hull of ``kept``
     """
     wedges = np.asarray(wedges, dtype=object)
+    tol = LAZY_TOL * room.area
+    kept = sorted(int(c) for c in current)
+    removed = []
+    h = None
+    for _ in range(m):
+        s = len(kept)
+        if s == 1:
+            removed.append(kept.pop())
+            h = room
+            break
+        prefix = [room]  # prefix[i] = hull of kept[:i], i = 0 .. s-1
+        for c in kept[:-1]:
+            prefix.append(prefix[-1].difference(wedges[c]))
+        suffix = [room]  # reversed below: suffix[i] = hull of kept[i+1:], i = 0 .. s-1
+        for c in reversed(kept[1:]):
+            suffix.append(suffix[-1].difference(wedges[c]))
+        suffix = suffix[::-1]
+        without = np.empty(s, dtype=object)
+        without[0], without[-1] = suffix[0], prefix[-1]
+        if s > 2:
+            without[1:-1] = shapely.intersection(np.array(prefix[1:-1], dtype=object),
+                                                 np.array(suffix[1:-1], dtype=object))
+        i = _first_min(shapely.area(without), tol)
+        removed.append(kept.pop(i))
+        h = without[i]
+    return kept, removed, h
+
+
+def greedy_remove_reference(wedges, room: Polygon, current, m: int):
+    """Reference for :func:`greedy_remove` (tests): full prefix/suffix hulls, 3|S| overlays.
+
+    Same tie rule (within ``LAZY_TOL * room.area``: lowest index) and returns.
+    """
+    wedges = np.asarray(wedges, dtype=object)
+    tol = LAZY_TOL * room.area
     kept = sorted(int(c) for c in current)
     removed = []
     h = None
@@ -235,7 +284,7 @@ def greedy_remove(wedges, room: Polygon, current, m: int):
         suffix = suffix[::-1]  # suffix[i] = hull of kept[i:]
         without = shapely.intersection(np.array(prefix[:s], dtype=object),
                                        np.array(suffix[1:], dtype=object))
-        i = int(np.argmin(shapely.area(without)))  # ties: lowest index
+        i = _first_min(shapely.area(without), tol)
         removed.append(kept.pop(i))
         h = without[i]
     return kept, removed, h
@@ -249,7 +298,8 @@ def incremental_select(wedges, room: Polygon, current, m: int, cones=None) -> li
     list of ints, sorted, the same size as ``current``.
     """
     kept, _, h = greedy_remove(wedges, room, current, m)
-    added, _ = lazy_greedy_select(wedges, room, m, start=kept, hull=h, cones=cones)
+    added, _ = lazy_greedy_select(wedges, room, m, start=kept, hull=h, cones=cones,
+                                  final_hull=False)
     return sorted(kept + added)
 
 

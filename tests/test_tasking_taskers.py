@@ -259,3 +259,39 @@ def test_incremental_tasker_errors():
         IncrementalTasker(3, 1, 0)
     with pytest.raises(ValueError, match="m must be >= 1 and <= 3"):
         IncrementalTasker(3, 4)
+
+
+# --- fast removal vs reference -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("fov", [np.pi, np.radians(49.0)])
+@pytest.mark.parametrize("seed", range(6))
+def test_greedy_remove_matches_reference(fov, seed):
+    from tasking.taskers import greedy_remove, greedy_remove_reference
+
+    rng = np.random.default_rng(100 + seed)
+    n = int(rng.integers(6, 17))
+    xy, yaw = ring_cameras(n)
+    c = random_discs(rng, int(rng.integers(1, 6)))
+    w = free_wedges_from_discs(xy, yaw, fov, c, R, ROOM, strict=False)
+    k = int(rng.integers(2, n + 1))
+    current = np.sort(rng.choice(n, k, replace=False))
+    for m in range(1, min(k, 3) + 1):
+        kept, removed, h = greedy_remove(w, ROOM, current, m)
+        kept_r, removed_r, h_r = greedy_remove_reference(w, ROOM, current, m)
+        assert (kept, removed) == (kept_r, removed_r)
+        assert abs(h.area - h_r.area) <= 1e-9 * max(h_r.area, 1e-12)
+        exact = hull_from_wedges(w, ROOM, kept).area
+        assert abs(h.area - exact) <= 1e-9 * ROOM.area
+
+
+def test_greedy_remove_down_to_one_camera():
+    from tasking.taskers import greedy_remove, greedy_remove_reference
+
+    xy, yaw, c = drop(3, n=6, m=3)
+    w = free_wedges_from_discs(xy, yaw, np.pi, c, R, ROOM)
+    for m in (2, 3):
+        got = greedy_remove(w, ROOM, [1, 3, 4], m)
+        ref = greedy_remove_reference(w, ROOM, [1, 3, 4], m)
+        assert got[:2] == ref[:2]
+        assert abs(got[2].area - ref[2].area) <= 1e-9 * ROOM.area
