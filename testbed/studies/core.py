@@ -126,3 +126,40 @@ def mean_sem(x) -> tuple[float, float]:
     if len(x) < 2:
         return float(x.mean()), 0.0
     return float(x.mean()), float(x.std(ddof=1) / np.sqrt(len(x)))
+
+
+def tasker_table(records: list[dict], title: str, digits: int = 4) -> str:
+    """A k-by-tasker table of ``residual`` from records with ``tasker``, ``k``, ``residual``."""
+    taskers = list(dict.fromkeys(r["tasker"] for r in records))
+    t = {(r["tasker"], r["k"]): r for r in records}
+    lines = [title, f"{'k':>3} " + "".join(f"{n:>13}" for n in taskers)]
+    for k in sorted({r["k"] for r in records}):
+        lines.append(f"{k:>3} " + "".join(f"{t[(n, k)]['residual']:13.{digits}f}" for n in taskers))
+    return "\n".join(lines)
+
+
+def plot_taskers(records: list[dict], path: str, title: str, ylabel: str, *, log: bool = False,
+                 reference: tuple[float, str] | None = None) -> None:
+    """Residual vs k, one line with standard-error bars per tasker, to a PNG at ``path``.
+
+    reference : optional (value, label) drawn as a dashed horizontal line
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for tasker in dict.fromkeys(r["tasker"] for r in records):
+        rs = [r for r in records if r["tasker"] == tasker]
+        ax.errorbar([r["k"] for r in rs], [r["residual"] for r in rs],
+                    yerr=[r["residual_sem"] for r in rs], marker="o", capsize=3, label=tasker)
+    if reference is not None:
+        ax.axhline(reference[0], color="0.5", ls="--", label=reference[1])
+    if log:
+        ax.set_yscale("log")
+    ax.set(xlabel="number of cameras tasked k", ylabel=ylabel, title=title)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)

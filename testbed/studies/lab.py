@@ -98,33 +98,12 @@ def run(opts: dict, trials: int, seed: int, runner) -> dict:
 
 
 def format_table(result: dict) -> str:
-    recs = result["records"]
-    taskers = list(dict.fromkeys(r["tasker"] for r in recs))
-    t = {(r["tasker"], r["k"]): r for r in recs}
-    lines = ["Normalised residual hull area on the rendered lab (hull area / min 16-camera area):",
-             f"{'k':>3} " + "".join(f"{n:>13}" for n in taskers)]
-    for k in sorted({r["k"] for r in recs}):
-        lines.append(f"{k:>3} " + "".join(f"{t[(n, k)]['residual']:13.3f}" for n in taskers))
-    lines.append(f"all 16 cameras: {result['all_cameras_residual']:.3f}")
-    return "\n".join(lines)
+    title = "Normalised residual hull area on the rendered lab (hull area / min 16-camera area):"
+    return (core.tasker_table(result["records"], title, digits=3)
+            + f"\nall 16 cameras: {result['all_cameras_residual']:.3f}")
 
 
 def plot(result: dict, path: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    recs = result["records"]
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    for tasker in dict.fromkeys(r["tasker"] for r in recs):
-        rs = [r for r in recs if r["tasker"] == tasker]
-        ax.errorbar([r["k"] for r in rs], [r["residual"] for r in rs],
-                    yerr=[r["residual_sem"] for r in rs], marker="o", capsize=3, label=tasker)
-    ax.axhline(result["all_cameras_residual"], color="0.5", ls="--", label="all 16 cameras")
-    ax.set(xlabel="number of cameras tasked k", ylabel="hull area / min 16-camera area",
-           title="Fig. 13: taskers on the rendered lab")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    core.plot_taskers(result["records"], path, "Fig. 13: taskers on the rendered lab",
+                      "hull area / min 16-camera area",
+                      reference=(result["all_cameras_residual"], "all 16 cameras"))

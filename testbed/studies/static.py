@@ -75,33 +75,9 @@ def run(opts: dict, trials: int, seed: int, runner) -> dict:
 
 
 def format_table(result: dict) -> str:
-    recs = result["records"]
-    taskers = list(dict.fromkeys(r["tasker"] for r in recs))
-    ks = sorted({r["k"] for r in recs})
-    t = {(r["tasker"], r["k"]): r for r in recs}
-    lines = ["Residual (object areas) with static objects, by tasker and k:",
-             f"{'k':>3} " + "".join(f"{n:>13}" for n in taskers)]
-    for k in ks:
-        lines.append(f"{k:>3} " + "".join(f"{t[(n, k)]['residual']:13.4f}" for n in taskers))
-    return "\n".join(lines)
+    return core.tasker_table(result["records"], "Residual (object areas) with static objects, by tasker and k:")
 
 
 def plot(result: dict, path: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    recs = result["records"]
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    for tasker in dict.fromkeys(r["tasker"] for r in recs):
-        rs = [r for r in recs if r["tasker"] == tasker]
-        ax.errorbar([r["k"] for r in rs], [r["residual"] for r in rs],
-                    yerr=[r["residual_sem"] for r in rs], marker="o", capsize=3, label=tasker)
-    ax.set_yscale("log")
-    ax.set(xlabel="number of cameras tasked k", ylabel="residual / object area",
-           title="Fig. 8: taskers with static objects")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    core.plot_taskers(result["records"], path, "Fig. 8: taskers with static objects",
+                      "residual / object area", log=True)
