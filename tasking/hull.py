@@ -56,7 +56,7 @@ __all__ = [
 
 def free_wedges_from_discs(
     camera_xy, camera_yaw, fov, centers, radii, room, *, strict: bool = True,
-    return_cones: bool = False,
+    return_cones: bool = False, polygons: bool = True,
 ):
     """Per-camera union of free wedges (not clipped to the room), from object discs.
 
@@ -74,6 +74,9 @@ def free_wedges_from_discs(
     return_cones : bool
         Also return the free wedges as a table ``(camera (q,) int, apex (q, 2),
         theta0 (q,), theta1 (q,))``, world-frame radians, grouped by camera.
+    polygons : bool
+        Build the wedge polygons (default); with ``polygons=False`` and ``return_cones``
+        only the table is built and the wedges are returned as None.
 
     Returns
     -------
@@ -95,7 +98,8 @@ def free_wedges_from_discs(
     half = 0.5 * fov
     lo, hi = cones.disc_intervals(camera_xy, camera_yaw, centers, radii)
     lo, hi = cones.clip_to_fov(lo, hi, half)
-    wedges, table = _wedges(camera_xy, camera_yaw, half, lo, hi, room)
+    wedges, table = _wedges(camera_xy, camera_yaw, half, lo, hi, room,
+                            polygons or not return_cones)
     return (wedges, table) if return_cones else wedges
 
 
@@ -140,12 +144,14 @@ def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room) -> np.ndarr
     return _wedges(camera_xy, yaw, 0.5 * fov, lo, hi, room)[0]
 
 
-def _wedges(camera_xy, yaw, half, lo, hi, room) -> np.ndarray:
+def _wedges(camera_xy, yaw, half, lo, hi, room, polygons: bool = True):
     camera, a0, a1 = cones.free_intervals(lo, hi, half)
-    radius = cones.wedge_radius(room, camera_xy)
     theta0, theta1 = yaw[camera] + a0, yaw[camera] + a1
-    polys = cones.wedge_polygons(camera_xy[camera], theta0, theta1, radius)
     table = (camera, camera_xy[camera], theta0, theta1)
+    if not polygons:
+        return None, table
+    radius = cones.wedge_radius(room, camera_xy)
+    polys = cones.wedge_polygons(camera_xy[camera], theta0, theta1, radius)
     return cones.group_by_camera(polys, camera, camera_xy.shape[0]), table
 
 

@@ -37,8 +37,9 @@ from shapely.geometry import Polygon
 
 from .checks import check_choice, check_indices, check_int, check_points, check_radii
 from .clustering import clustering_select, pair_axes
+from .cones import wedge_radius
 from .coverage import coverage_cells, optimal_subset
-from .fan import cone_areas, ring_edges, split_wide
+from .fan import UnionAreas, cone_areas, convex_ring, ring_edges, split_wide
 from .hull import free_wedges_from_discs, hull_from_wedges
 
 __all__ = [
@@ -52,6 +53,7 @@ __all__ = [
     "greedy_remove",
     "greedy_remove_reference",
     "incremental_select",
+    "incremental_select_convex",
     "IncrementalTasker",
 ]
 
@@ -303,6 +305,50 @@ def incremental_select(wedges, room: Polygon, current, m: int, cones=None) -> li
     return sorted(kept + added)
 
 
+def incremental_select_convex(camera_xy, cones, room: Polygon, room_xy, current,
+                              m: int) -> list:
+    """:func:`incremental_select` for a convex room, without polygon overlays.
+
+    Every hull area comes from :class:`tasking.fan.UnionAreas` (``area(hull(T)) =
+    area(room) - area(room ∩ ⋃ wedges[T])``, exact to ~1e-12 of the room's area), all
+    candidate sets of a round in one numpy call. Removal: the same rule as
+    :func:`greedy_remove` (smallest hull; within ``LAZY_TOL * room.area`` the lowest
+    index). Adding: the largest gain, within ``LAZY_TOL * room.area`` the lowest index
+    (lazy greedy takes the larger of two such near-equal gains; both are greedy choices).
+
+    Parameters
+    ----------
+    camera_xy : (N, 2) float; cones : wedge table from ``free_wedges_from_discs(...,
+    return_cones=True)``; room_xy : ``convex_ring(room)``; current : (k,) int; m : int
+
+    Returns
+    -------
+    list of ints, sorted, the same size as ``current``.
+    """
+    n = camera_xy.shape[0]
+    ua = UnionAreas(room_xy, split_wide(*cones), n, wedge_radius(room, camera_xy))
+    tol = LAZY_TOL * room.area
+    kept = sorted(int(c) for c in current)
+    for _ in range(m):
+        if len(kept) == 1:
+            kept = []
+            break
+        sets = np.zeros((len(kept), n), dtype=bool)
+        sets[:, kept] = True
+        sets[np.arange(len(kept)), kept] = False
+        # hull area = room area - covered area: the smallest hull is the largest cover
+        i = _first_min(-ua(sets), tol)
+        kept.pop(i)
+    start = len(kept)
+    for _ in range(len(current) - start):
+        cand = np.setdiff1d(np.arange(n), kept)
+        sets = np.zeros((cand.size, n), dtype=bool)
+        sets[:, kept] = True
+        sets[np.arange(cand.size), cand] = True
+        kept.append(int(cand[_first_min(-ua(sets), tol)]))
+    return sorted(kept)
+
+
 def choose_cameras(
     tasker: str,
     k: int,
@@ -354,9 +400,14 @@ def choose_cameras(
         raise ValueError(f"rng must be a numpy Generator or None; got {type(rng).__name__}")
     if current is not None:
         current = check_indices("current", current, n, size=k)
+    room_xy = convex_ring(room) if tasker == "incremental" and current is not None else None
     # all geometry validation (yaw, fov, room, finite values) happens here
     wedges, cones = free_wedges_from_discs(camera_xy, camera_yaw, fov, estimates, radius,
-                                           room, strict=False, return_cones=True)
+                                           room, strict=False, return_cones=True,
+                                           polygons=room_xy is None)
+    if room_xy is not None:
+        return np.array(incremental_select_convex(camera_xy, cones, room, room_xy, current,
+                                                  m), dtype=np.intp)
     if tasker == "clustering" and pair_axes(estimates).size:
         seed = 0 if rng is None else int(rng.integers(2**31 - 1))
         return clustering_select(camera_yaw, estimates, k, seed)

@@ -295,3 +295,82 @@ def test_greedy_remove_down_to_one_camera():
         ref = greedy_remove_reference(w, ROOM, [1, 3, 4], m)
         assert got[:2] == ref[:2]
         assert abs(got[2].area - ref[2].area) <= 1e-9 * ROOM.area
+
+
+# --- overlay-free incremental step (convex rooms) vs the polygon reference --------------
+
+
+def _reference_incremental(w, room, current, m):
+    """Reference removal, then plain greedy adds by full hull areas (lowest index on ties)."""
+    from tasking.taskers import LAZY_TOL, greedy_remove_reference
+
+    kept, _, _ = greedy_remove_reference(w, room, current, m)
+    tol = LAZY_TOL * room.area
+    for _ in range(len(current) - len(kept)):
+        cand = [c for c in range(len(w)) if c not in kept]
+        areas = np.array([hull_from_wedges(w, room, kept + [c]).area for c in cand])
+        kept = kept + [cand[int(np.flatnonzero(areas <= areas.min() + tol)[0])]]
+    return sorted(kept)
+
+
+def _check_convex_step(xy, yaw, fov, c, room, current, m):
+    from tasking.cones import wedge_radius
+    from tasking.fan import UnionAreas, convex_ring, split_wide
+    from tasking.taskers import incremental_select_convex
+
+    w, cones = free_wedges_from_discs(xy, yaw, fov, c, R, room, strict=False,
+                                      return_cones=True)
+    ring = convex_ring(room)
+    assert ring is not None
+    got = incremental_select_convex(xy, cones, room, ring, current, m)
+    assert got == _reference_incremental(w, room, list(current), m)
+    assert choose_cameras("incremental", len(current), xy, yaw, fov, c, R, room,
+                          current=current, m=m).tolist() == got
+    # the covered areas themselves agree with GEOS
+    ua = UnionAreas(ring, split_wide(*cones), len(xy), wedge_radius(room, xy))
+    rng = np.random.default_rng(len(xy) + m)
+    sets = rng.random((6, len(xy))) < 0.5
+    ref = [room.area - hull_from_wedges(w, room, np.flatnonzero(s)).area for s in sets]
+    assert np.allclose(ua(sets), ref, rtol=0, atol=1e-10 * room.area)
+
+
+@pytest.mark.parametrize("fov", [np.pi, np.radians(49.0)])
+@pytest.mark.parametrize("seed", range(6))
+def test_incremental_convex_matches_polygon_reference(fov, seed):
+    rng = np.random.default_rng(300 + seed)
+    n = int(rng.integers(6, 17))
+    xy, yaw = ring_cameras(n)
+    c = random_discs(rng, int(rng.integers(1, 6)))
+    k = int(rng.integers(2, n + 1))
+    current = np.sort(rng.choice(n, k, replace=False))
+    for m in range(1, min(k, 3) + 1):
+        _check_convex_step(xy, yaw, fov, c, ROOM, current, m)
+
+
+@pytest.mark.parametrize("fov", [np.pi, np.radians(49.0), np.radians(120.0)])
+def test_incremental_convex_lab_room_with_rays_along_walls(fov):
+    # 180-degree cameras on the walls: their field-of-view edges run along the walls
+    room = box(0, 0, 6.7056, 5.7912)
+    xs = np.linspace(0.5, 6.2, 4)
+    xy = np.r_[np.c_[xs, np.zeros(4)], np.c_[xs, np.full(4, 5.7912)],
+               [[0.0, 2.0], [6.7056, 3.5]]]
+    yaw = np.r_[np.full(4, np.pi / 2), np.full(4, -np.pi / 2), [0.0, np.pi]]
+    est = np.array([[2.0, 2.0], [4.5, 3.5], [3.0, 4.0]])
+    for m in (1, 2):
+        _check_convex_step(xy, yaw, fov, est, room, [0, 2, 5, 7, 8], m)
+    # no estimates, and a camera inside an estimate (blind)
+    _check_convex_step(xy, yaw, fov, np.empty((0, 2)), room, [1, 4, 9], 1)
+    _check_convex_step(xy, yaw, fov, np.array([[0.5, 0.05]]), room, [0, 3, 6], 2)
+
+
+def test_non_convex_room_uses_the_polygon_path():
+    from tasking.fan import convex_ring
+
+    room = box(0, 0, 2, 2).difference(box(1, 1, 2, 2))
+    assert convex_ring(room) is None
+    assert convex_ring(box(0, 0, 2, 2).difference(box(0.5, 0.5, 1, 1))) is None
+    xy = np.array([[0.0, 0.5], [0.5, 0.0], [2.0, 0.5], [0.5, 2.0]])
+    yaw = np.array([0.0, np.pi / 2, np.pi, -np.pi / 2])
+    got = choose_cameras("incremental", 2, xy, yaw, np.pi, [[0.5, 0.5]], R, room,
+                         current=[0, 1], m=1)
+    assert got.size == 2
