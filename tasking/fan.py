@@ -169,32 +169,6 @@ def _clip_pairs(a, d, apex, u0, u1, strict):
     return lo, hi
 
 
-def _union_len(inset, cam, item, lo, hi, n_items):
-    """(S, n_items): measure of the union of the intervals (sorted by item, lo) whose
-    camera is in each set."""
-    S = inset.shape[0]
-    if item.size == 0:
-        return np.zeros((S, n_items))
-    valid = inset[:, cam]
-    off = 2.0 * item
-    L = np.where(valid, lo + off, off)
-    H = np.where(valid, hi + off, off)
-    run = np.maximum.accumulate(H, axis=1)
-    prev = np.empty_like(run)
-    prev[:, 0] = -1.0
-    prev[:, 1:] = run[:, :-1]
-    cov = np.maximum(0.0, H - np.maximum(L, prev))
-    idx = (np.arange(S)[:, None] * n_items + item[None, :]).ravel()
-    return np.bincount(idx, weights=cov.ravel(), minlength=S * n_items).reshape(S, n_items)
-
-
-def _sorted(cam, item, lo, hi):
-    keep = hi > lo
-    cam, item, lo, hi = cam[keep], item[keep], lo[keep], hi[keep]
-    order = np.lexsort((lo, item))
-    return cam[order], item[order], lo[order], hi[order]
-
-
 class UnionAreas:
     """Exact areas ``area(room ∩ ⋃_{c in T} wedges[c])`` for many camera sets T at once.
 
@@ -208,8 +182,10 @@ class UnionAreas:
     Rays are clipped to the room shrunk by ``1e-12`` of its size and the room's edges are
     tested ``1e-12`` inside, so a ray along a wall is counted once, by the wall; a ray is
     covered only by other cameras' open cones. Areas agree with GEOS overlays to ~1e-12 of
-    the room's area. Build once per frame (a few numpy passes over rays x room edges);
-    each call is one sweep over the sorted intervals.
+    the room's area. Build once per frame: every room edge and ray is cut once into pieces
+    of constant cover (one sort of all interval end points; the cover of a piece is the
+    running sum of ``+-2**camera``, a bitmask, for up to 62 cameras, else a (piece,
+    camera) table), so a call is one vectorised pass over the pieces for all sets.
 
     >>> from shapely.geometry import box
     >>> sq = np.asarray(box(0, 0, 2, 2).exterior.coords)
@@ -269,15 +245,17 @@ class UnionAreas:
         # room edges: classified by their vertices; clipped exactly only near a ray
         full = (st[:q] == 1) & (st[q:] == 1)
         part = ~(full | (st[:q] == -1) | (st[q:] == -1))
-        onehot = np.zeros((n, q))
-        onehot[camera, np.arange(q)] = 1.0
-        self.fullcam = onehot @ full  # (n, E) count of cones fully covering each edge
+        # (n, E) count of cones fully covering each edge (cones are grouped by camera;
+        # no matmul: a threaded BLAS would cost more CPU than it saves)
+        self.fullcam = np.zeros((n, E))
+        if q:
+            g = np.flatnonzero(np.r_[True, camera[1:] != camera[:-1]])
+            self.fullcam[camera[g]] = np.add.reduceat(full.astype(float), g, axis=0)
         ci, ei = np.nonzero(part)
         nin = np.c_[-d[:, 1], d[:, 0]] / ln[:, None]
-        lo, hi = _clip_pairs(a[ei] + delta * nin[ei], d[ei], apex[ci], u0[ci], u1[ci], False)
-        self.room = _sorted(camera[ci], ei, lo, hi)
-        self.room_w = 0.5 * (a[:, 0] * d[:, 1] - a[:, 1] * d[:, 0])
-        self.E = E
+        elo, ehi = _clip_pairs(a[ei] + delta * nin[ei], d[ei], apex[ci], u0[ci], u1[ci], False)
+        fullc = self.fullcam
+        room_iv = (camera[ci], ei, elo, ehi)
         # the part of each ray inside the room shrunk by delta; only the edges its line
         # crosses (a vertex sign change) bind
         cross = (mn <= 0) & (mx >= 0) & ok
@@ -301,28 +279,107 @@ class UnionAreas:
             rhi[rows] = np.minimum(np.minimum.reduceat(thi, start), 1.0)
         rhi = np.maximum(rhi, rlo)
         inside = rhi > rlo
-        # cover of each in-room ray by the other cameras' cones (open cones)
-        ri = np.flatnonzero(inside)
-        cj, rj = np.nonzero(camera[:, None] != rcam[None, ri])
-        rj = ri[rj]
-        lo, hi = _clip_pairs(ra[rj], rd[rj], apex[cj], u0[cj], u1[cj], True)
-        lo = np.maximum(lo, rlo[rj])
-        hi = np.minimum(hi, rhi[rj])
-        self.rays = _sorted(camera[cj], rj, lo, hi)
+        # cover of each in-room ray by the other cameras' cones (open cones), as a dense
+        # (ray, cone) table: the same arithmetic as _clip_pairs, without fancy indexing
+        px = ra[:, None, 0] - apex[None, :, 0]
+        py = ra[:, None, 1] - apex[None, :, 1]
+        dx, dy = rd[:, None, 0], rd[:, None, 1]
+        lo = np.zeros((nr, q))
+        hi = np.ones((nr, q))
+        for al, be in ((u0[None, :, 0] * py - u0[None, :, 1] * px,
+                        u0[None, :, 0] * dy - u0[None, :, 1] * dx),
+                       (px * u1[None, :, 1] - py * u1[None, :, 0],
+                        dx * u1[None, :, 1] - dy * u1[None, :, 0])):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = -al / be
+            lo = np.where(be > 0, np.maximum(lo, t), lo)
+            hi = np.where(be < 0, np.minimum(hi, t), hi)
+            hi = np.where((be == 0) & (al <= 0), -1.0, hi)
+        lo = np.maximum(lo, rlo[:, None])
+        hi = np.minimum(hi, rhi[:, None])
+        use = (hi > lo) & (camera[None, :] != rcam[:, None]) & inside[:, None]
+        rj, cj = np.nonzero(use)
         self.ray_len = rhi - rlo
         self.ray_w = 0.5 * (ra[:, 0] * rd[:, 1] - ra[:, 1] * rd[:, 0])
         self.rcam = rcam
+        self.room_w = 0.5 * (a[:, 0] * d[:, 1] - a[:, 1] * d[:, 0])
+        self.E = E
+        self._pieces(camera, E, fullc, room_iv,
+                     (camera[cj], rj, lo[rj, cj], hi[rj, cj]))
+
+    def _pieces(self, camera, E, fullc, room, rays):
+        """Cut every room edge and ray into pieces of constant cover: piece weights
+        ``v`` (boundary integrand times length), cover table ``M`` (P, n) and the ray
+        camera of each piece (-1 for room edges)."""
+        n = self.n
+        ecam, eitem, elo, ehi = room
+        rcam_i, ritem, rlo, rhi = rays
+        keep = ehi > elo
+        ecam, eitem, elo, ehi = ecam[keep], eitem[keep], elo[keep], ehi[keep]
+        pe = np.unique(eitem)  # room edges cut by a cone's ray: sentinels at 0 and 1
+        item = np.concatenate([eitem, eitem, pe, pe, ritem + E, ritem + E])
+        pos = np.concatenate([elo, ehi, np.zeros(pe.size), np.ones(pe.size), rlo, rhi])
+        cam = np.concatenate([ecam, ecam, np.zeros(2 * pe.size, np.intp), rcam_i, rcam_i])
+        sgn = np.concatenate([np.ones(eitem.size), -np.ones(eitem.size),
+                              np.zeros(2 * pe.size), np.ones(ritem.size),
+                              -np.ones(ritem.size)])
+        order = np.argsort(2.0 * item + pos, kind="stable")
+        item, pos, cam, sgn = item[order], pos[order], cam[order], sgn[order]
+        same = item[1:] == item[:-1]
+        length = np.where(same, pos[1:] - pos[:-1], 0.0)
+        it = item[:-1]
+        edge = it < E
+        ie = np.minimum(it, E - 1)
+        ir = np.maximum(it - E, 0)
+        v = length * np.where(edge, self.room_w[ie], self.ray_w[ir])
+        pc = np.where(edge, -1, self.rcam[ir])
+        # whole room edges without cuts: one piece each, covered by fullc
+        whole = np.ones(E, bool)
+        whole[pe] = False
+        whole &= fullc.any(axis=0)
+        we = np.flatnonzero(whole)
+        if n <= 62:
+            # a camera's cones are disjoint, so the running sum of +-2**camera is the
+            # bitmask of the cameras covering each piece (exact in int64)
+            fb = ((fullc > 0).T.astype(np.int64) << np.arange(n)).sum(axis=1)
+            cover = np.cumsum(sgn.astype(np.int64) << cam)[:-1]
+            cover |= np.where(edge, fb[ie], 0)
+            sel = (length > 0) & (cover != 0)
+            self.bits = np.concatenate([cover[sel], fb[we]])
+            self.M = None
+        else:
+            delta = np.zeros((n, item.size))
+            delta[cam, np.arange(item.size)] = sgn
+            cover = (np.cumsum(delta, axis=1)[:, :-1] > 0.5).T
+            cover |= edge[:, None] & (fullc[:, ie].T > 0)
+            sel = (length > 0) & cover.any(axis=1)
+            self.M = np.concatenate([cover[sel], fullc[:, we].T > 0]).astype(float)
+            self.bits = None
+        self.v = np.concatenate([v[sel], self.room_w[we]])
+        self.pc = np.concatenate([pc[sel], np.full(we.size, -1)])
+        self.W = self.ray_w * self.ray_len  # (nr,) a ray's whole integrand
+        if self.bits is not None:
+            # bit tables for the call: room-edge pieces count if covered; ray pieces
+            # (negative) if covered and the ray's camera is in the set
+            ray = self.pc >= 0
+            self._eb, self._ev = self.bits[~ray], self.v[~ray]
+            self._rb, self._rv = self.bits[ray], self.v[ray]
+            self._rcb = np.left_shift(1, self.pc[ray]).astype(np.int64)
+            self._wcb = np.left_shift(1, self.rcam).astype(np.int64)
 
     def __call__(self, inset):
         """inset: (S, n) bool -> (S,) area of room ∩ union of the sets' wedges."""
         inset = np.atleast_2d(np.asarray(inset, dtype=bool))
-        full = (inset.astype(float) @ self.fullcam) > 0  # (S, E)
-        cam, item, lo, hi = self.room
-        part = _union_len(inset, cam, item, lo, hi, self.E)
-        room = np.where(full, 1.0, part) @ self.room_w
-        cam, item, lo, hi = self.rays
-        used = inset.any(axis=0)
-        keep = used[cam] & used[self.rcam[item]]  # only rays and cones of the sets count
-        cov = _union_len(inset, cam[keep], item[keep], lo[keep], hi[keep], self.ray_w.size)
-        rays = (inset[:, self.rcam] * (self.ray_len[None, :] - cov)) @ self.ray_w
-        return room + rays
+        if self.bits is not None:
+            sb = (inset.astype(np.int64) << np.arange(self.n)).sum(axis=1)[:, None]
+            room = np.where((sb & self._eb) != 0, self._ev, 0.0).sum(axis=1)
+            cut = np.where(((sb & self._rb) != 0) & ((sb & self._rcb) != 0), self._rv, 0.0)
+            whole = np.where((sb & self._wcb) != 0, self.W, 0.0).sum(axis=1)
+            return room - cut.sum(axis=1) + whole
+        T = inset.astype(float)
+        hit = (T @ self.M.T) > 0.5
+        ray = self.pc >= 0
+        sign = np.where(ray, -1.0, 1.0)
+        inray = np.where(ray[None, :], T[:, np.maximum(self.pc, 0)] > 0.5, True)
+        pieces = ((hit & inray) * (sign * self.v)).sum(axis=1)
+        return pieces + (T[:, self.rcam] * self.W).sum(axis=1)

@@ -374,3 +374,22 @@ def test_non_convex_room_uses_the_polygon_path():
     got = choose_cameras("incremental", 2, xy, yaw, np.pi, [[0.5, 0.5]], R, room,
                          current=[0, 1], m=1)
     assert got.size == 2
+
+
+def test_union_areas_many_cameras_uses_the_cover_table():
+    # more than 62 cameras: no int64 bitmasks, the (piece, camera) table instead
+    from tasking.cones import wedge_radius
+    from tasking.fan import UnionAreas, convex_ring, split_wide
+
+    xy, yaw = ring_cameras(70)
+    c = random_discs(np.random.default_rng(7), 4)
+    w, cones = free_wedges_from_discs(xy, yaw, np.pi, c, R, ROOM, strict=False,
+                                      return_cones=True)
+    ua = UnionAreas(convex_ring(ROOM), split_wide(*cones), 70, wedge_radius(ROOM, xy))
+    assert ua.bits is None
+    sets = np.zeros((3, 70), dtype=bool)
+    sets[0, [0, 30, 65]] = True
+    sets[1, ::9] = True
+    sets[2, [5]] = True
+    ref = [ROOM.area - hull_from_wedges(w, ROOM, np.flatnonzero(s)).area for s in sets]
+    assert np.allclose(ua(sets), ref, rtol=0, atol=1e-10 * ROOM.area)
