@@ -34,10 +34,6 @@ __all__ = ["ring_edges", "cone_areas", "split_wide", "convex_ring", "UnionAreas"
 #: Pairs (cone, edge) evaluated per numpy block.
 BLOCK = 1 << 20
 
-#: Room edges per chain in :class:`UnionAreas` (coarse side-of-line tests).
-CHAIN = 16
-
-
 def ring_edges(geom):
     """Edges of all rings of a (multi)polygon, exteriors CCW and holes CW.
 
@@ -152,21 +148,21 @@ def convex_ring(room):
     return None
 
 
-def _clip_pairs(a, d, apex, u0, u1, strict):
-    """Parameter interval [lo, hi] of segments a + t d, t in [0, 1], inside cones (pairwise)."""
-    p = a - apex
-    lo = np.zeros(a.shape[0])
-    hi = np.ones(a.shape[0])
-    # f0 = cross(u0, p + t d) >= 0, f1 = cross(p + t d, u1) >= 0
-    for al, be in ((u0[:, 0] * p[:, 1] - u0[:, 1] * p[:, 0], u0[:, 0] * d[:, 1] - u0[:, 1] * d[:, 0]),
-                   (p[:, 0] * u1[:, 1] - p[:, 1] * u1[:, 0], d[:, 0] * u1[:, 1] - d[:, 1] * u1[:, 0])):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = -al / be
-        lo = np.where(be > 0, np.maximum(lo, t), lo)
-        hi = np.where(be < 0, np.minimum(hi, t), hi)
-        bad = (al <= 0) if strict else (al < 0)
-        hi = np.where((be == 0) & bad, -1.0, hi)
-    return lo, hi
+def _cat(*parts):
+    """``np.concatenate`` of arrays and scalars (``np.r_`` without its parsing cost)."""
+    return np.concatenate([np.atleast_1d(p) for p in parts])
+
+
+def _next(x, axis=0):
+    """``np.roll(x, -1, axis)``: the next element along a closed ring."""
+    return np.concatenate([x[(slice(None),) * axis + (slice(1, None),)],
+                           x[(slice(None),) * axis + (slice(0, 1),)]], axis=axis)
+
+
+def _prev(x, axis=0):
+    """``np.roll(x, 1, axis)``: the previous element along a closed ring."""
+    return np.concatenate([x[(slice(None),) * axis + (slice(-1, None),)],
+                           x[(slice(None),) * axis + (slice(0, -1),)]], axis=axis)
 
 
 class UnionAreas:
@@ -179,12 +175,17 @@ class UnionAreas:
     n : number of cameras
     radius : float, metres, a ray length that leaves the room from every apex
 
-    Rays are clipped to the room shrunk by ``1e-12`` of its size and the room's edges are
-    tested ``1e-12`` inside, so a ray along a wall is counted once, by the wall; a ray is
-    covered only by other cameras' open cones. Areas agree with GEOS overlays to ~1e-12 of
-    the room's area. Build once per frame: every room edge and ray is cut once into pieces
-    of constant cover (one sort of all interval end points; the cover of a piece is the
-    running sum of ``+-2**camera``, a bitmask, for up to 62 cameras, else a (piece,
+    The room's boundary is a closed line parametrised by ``s = e + t`` (edge e, fraction
+    t); a cone covers one arc of it (two if its apex is outside the room: the far side and
+    the near side), from where its rays leave (and enter) the room. Ray exits come from a
+    bisection along the chain of edges facing the ray (O(log V) per ray), so nothing is
+    evaluated per (ray, edge) pair. Rays are clipped to the room shrunk by ``1e-12`` of its
+    size and the arcs are where they meet that shrunk room, so a ray along a wall is
+    counted once, by the wall; an apex on the wall is outside the shrunk room. A ray is
+    covered only by other cameras' open cones. Areas agree with GEOS overlays to ~1e-12
+    of the room's area. Build once per frame: the boundary and every ray are cut once
+    into pieces of constant cover (one sort of all end points; the cover of a piece is
+    the running sum of ``+-2**camera``, a bitmask, for up to 62 cameras, else a (piece,
     camera) table), so a call is one vectorised pass over the pieces for all sets.
 
     >>> from shapely.geometry import box
@@ -197,90 +198,153 @@ class UnionAreas:
 
     def __init__(self, room_xy, cones, n, radius):
         camera, apex, t0, t1 = cones
+        keep = t1 > t0
+        camera, apex, t0, t1 = camera[keep], apex[keep], t0[keep], t1[keep]
         self.n = n
-        v = room_xy
-        a, d = v[:-1], v[1:] - v[:-1]
-        if np.sum(a[:, 0] * d[:, 1] - a[:, 1] * d[:, 0]) < 0:
+        v = np.asarray(room_xy, dtype=float)
+        d = np.diff(v, axis=0)
+        v, d = v[:-1][np.any(d != 0, axis=1)], d[np.any(d != 0, axis=1)]
+        if np.sum(v[:, 0] * d[:, 1] - v[:, 1] * d[:, 0]) < 0:
             v = v[::-1]
-            a, d = v[:-1], v[1:] - v[:-1]
-        E = a.shape[0]
+            d = _next(v) - v
+        E = v.shape[0]
         ln = np.hypot(d[:, 0], d[:, 1])
-        span = float(np.ptp(v, axis=0).max())
-        delta = 1e-12 * span
-        eps = 1e-9 * span
-        u0 = np.c_[np.cos(t0), np.sin(t0)]
-        u1 = np.c_[np.cos(t1), np.sin(t1)]
+        delta = 1e-12 * float(np.ptp(v, axis=0).max())
+        # the shrunk room: every edge moved delta inwards (inward normal nin)
+        nin = np.stack((-d[:, 1], d[:, 0]), axis=-1) / ln[:, None]
+        npr = _prev(nin)
+        vs = v + delta * (npr + nin) / (1.0 + np.sum(npr * nin, axis=1))[:, None]
+        ds = _next(vs) - vs
+        # outward normal angle of every edge, increasing around the ring (by 2 pi)
+        beta = np.maximum.accumulate(np.unwrap(np.arctan2(-d[:, 0], d[:, 1])))
+        self._vs, self._ds, self._E = vs, ds, E
+        self._beta2 = _cat(beta, beta + 2 * np.pi)
         q = camera.size
-        # rays: theta0 ray outwards, theta1 ray inwards (the cone's boundary, CCW)
-        ra = np.r_[apex, apex + radius * u1]
-        rd = np.r_[radius * u0, -radius * u1]
-        rcam = np.r_[camera, camera]
-        # sv = cross(rd_r, v - ra_r): the side of room vertex v of ray r's line; for the
-        # cones sv[:q] = radius * cross(u0, v - apex), sv[q:] = radius * cross(v - apex, u1),
-        # both >= 0 inside the cone. The ring is cut into chains of CHAIN edges; a chain
-        # whose bounding circle is clear of a line lies on one side of it, and only the
-        # other (ray, chain) pairs are evaluated vertex by vertex.
-        eps_r = eps * radius
-        nr = ra.shape[0]
-        K = -(-E // CHAIN)
-        vk = np.concatenate([v, np.repeat(v[-1:], K * CHAIN + 1 - v.shape[0], axis=0)])
-        chain = np.lib.stride_tricks.sliding_window_view(vk, CHAIN + 1, axis=0)[::CHAIN]
-        chain = np.moveaxis(chain, -1, 1)  # (K, CHAIN + 1, 2)
-        ctr = chain.mean(axis=1)
-        rad = np.sqrt(((chain - ctr[:, None, :]) ** 2).sum(axis=2)).max(axis=1)
-        rc = rd[:, 0] * ra[:, 1] - rd[:, 1] * ra[:, 0]
-        sc = np.outer(rd[:, 0], ctr[:, 1]) - np.outer(rd[:, 1], ctr[:, 0]) - rc[:, None]
-        clear = np.abs(sc) > rad[None, :] * radius + 2 * eps_r
-        st = np.repeat(np.where(clear, np.sign(sc), 0).astype(np.int8), CHAIN, axis=1)[:, :E]
-        pr, pk = np.nonzero(~clear)
-        cv = chain[pk]  # (P, CHAIN + 1, 2)
-        sv = rd[pr, None, 0] * cv[:, :, 1] - rd[pr, None, 1] * cv[:, :, 0] - rc[pr, None]
-        mn = np.minimum(sv[:, :-1], sv[:, 1:])
-        mx = np.maximum(sv[:, :-1], sv[:, 1:])
-        pe = pk[:, None] * CHAIN + np.arange(CHAIN)[None, :]  # (P, CHAIN) edge index
-        ok = pe < E
-        pst = np.where(mn > eps_r, 1, np.where(mx < -eps_r, -1, 0)).astype(np.int8)
-        prr = np.broadcast_to(pr[:, None], pe.shape)
-        st[prr[ok], pe[ok]] = pst[ok]
-        # room edges: classified by their vertices; clipped exactly only near a ray
-        full = (st[:q] == 1) & (st[q:] == 1)
-        part = ~(full | (st[:q] == -1) | (st[q:] == -1))
-        # (n, E) count of cones fully covering each edge (cones are grouped by camera;
-        # no matmul: a threaded BLAS would cost more CPU than it saves)
-        self.fullcam = np.zeros((n, E))
-        if q:
-            g = np.flatnonzero(np.r_[True, camera[1:] != camera[:-1]])
-            self.fullcam[camera[g]] = np.add.reduceat(full.astype(float), g, axis=0)
-        ci, ei = np.nonzero(part)
-        nin = np.c_[-d[:, 1], d[:, 0]] / ln[:, None]
-        elo, ehi = _clip_pairs(a[ei] + delta * nin[ei], d[ei], apex[ci], u0[ci], u1[ci], False)
-        fullc = self.fullcam
-        room_iv = (camera[ci], ei, elo, ehi)
-        # the part of each ray inside the room shrunk by delta; only the edges its line
-        # crosses (a vertex sign change) bind
-        cross = (mn <= 0) & (mx >= 0) & ok
-        ri, ei = prr[cross], pe[cross]
-        order = np.argsort(ri, kind="stable")
-        ri, ei = ri[order], ei[order]
-        g0 = (d[ei, 0] * (ra[ri, 1] - a[ei, 1]) - d[ei, 1] * (ra[ri, 0] - a[ei, 0])
-              - delta * ln[ei])
-        g1 = d[ei, 0] * rd[ri, 1] - d[ei, 1] * rd[ri, 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = -g0 / g1
-        tlo = np.where(g1 > 0, t, 0.0)
-        thi = np.where(g1 < 0, t, 1.0)
-        thi = np.where((g1 == 0) & (g0 < 0), -1.0, thi)
-        rlo = np.zeros(nr)
-        rhi = np.zeros(nr)
-        if ri.size:
-            start = np.flatnonzero(np.r_[True, ri[1:] != ri[:-1]])
-            rows = ri[start]
-            rlo[rows] = np.maximum(np.maximum.reduceat(tlo, start), 0.0)
-            rhi[rows] = np.minimum(np.minimum.reduceat(thi, start), 1.0)
+        # cameras: inside the shrunk room, or outside with a near chain of visible edges
+        g = np.flatnonzero(_cat(True, camera[1:] != camera[:-1])) if q else np.empty(0, int)
+        cap = apex[g]  # (nc, 2) one apex per camera with cones
+        rel = cap[:, None, :] - vs[None, :, :]
+        vis = ds[None, :, 0] * rel[:, :, 1] - ds[None, :, 1] * rel[:, :, 0] < 0  # (nc, E)
+        out = vis.any(axis=1)
+        first = np.argmax(vis & ~_prev(vis, axis=1), axis=1)  # near chain's first edge
+        last = np.argmax(vis & ~_next(vis, axis=1), axis=1)  # and last edge
+        s_max = first.astype(float)  # tangent vertex seen at the largest angle
+        s_min = ((last + 1) % E).astype(float)  # ... at the smallest angle
+        far = np.mod(s_max - s_min, E)  # far chain: [s_min, s_min + far]
+        tmin, tmax = vs[(last + 1) % E] - cap, vs[first] - cap
+        a_min = np.arctan2(tmin[:, 1], tmin[:, 0])
+        width = np.mod(np.arctan2(tmax[:, 1], tmax[:, 0]) - a_min, 2 * np.pi)
+        # per cone: clip outside cameras' cones to the directions that meet the room
+        ci = np.repeat(np.arange(g.size), np.diff(_cat(g, q)))
+        o = out[ci]
+        lo = np.mod(t0 - a_min[ci], 2 * np.pi)
+        hi = lo + (t1 - t0)
+        wrap = (lo > width[ci]) & (hi >= 2 * np.pi)
+        lo, hi = np.where(wrap, 0.0, lo), np.where(wrap, hi - 2 * np.pi, hi)
+        hit = ~o | (lo < width[ci])
+        clip0 = o & (lo <= 0.0)
+        clip1 = o & (hi >= width[ci])
+        hi = np.minimum(hi, width[ci])
+        th0 = np.where(o, a_min[ci] + lo, t0)
+        th1 = np.where(o, a_min[ci] + hi, t1)
+        sel = hit & (~o | (hi > lo))
+        camera, apex, ci, o = camera[sel], apex[sel], ci[sel], o[sel]
+        th0, th1, clip0, clip1 = th0[sel], th1[sel], clip0[sel], clip1[sel]
+        q = camera.size
+        u0 = np.stack((np.cos(th0), np.sin(th0)), axis=-1)
+        u1 = np.stack((np.cos(th1), np.sin(th1)), axis=-1)
+        # where the two rays of every cone leave (and enter) the shrunk room
+        pa, ua = _cat(apex, apex), _cat(u0, u1)
+        lam_out, s_out = self._cross_chain(pa, ua, front=True)
+        lam_in, s_in = self._cross_chain(pa, ua, front=False)
+        oo = _cat(o, o)
+        lam_in = np.where(oo, np.maximum(lam_in, 0.0), 0.0)
+        # a ray clipped to a tangent direction only touches the room, at the tangent vertex
+        tang = _cat(clip0, clip1)
+        s_tan = _cat(s_min[ci], s_max[ci])
+        s_out = np.where(tang, s_tan, s_out)
+        s_in = np.where(tang, s_tan, s_in)
+        lam_out = np.where(tang, lam_in, np.maximum(lam_out, lam_in))
+        # boundary arcs: far side from exit(theta0) to exit(theta1), near side (cameras
+        # outside) from entry(theta1) to entry(theta0), both counter-clockwise
+        a0, a1 = s_out[:q], s_out[q:]
+        span_in = np.mod(a1 - a0, E)
+        same = (np.floor(a0) == np.floor(a1)) & (a1 < a0)
+        span_in = np.where(same, 0.0, span_in)
+        b_far = s_min[ci]
+        f0 = self._chain_pos(a0 - b_far, far[ci])
+        f1 = np.maximum(self._chain_pos(a1 - b_far, far[ci]), f0)
+        n0 = self._chain_pos(s_in[q:] - s_max[ci], E - far[ci])
+        n1 = np.maximum(self._chain_pos(s_in[:q] - s_max[ci], E - far[ci]), n0)
+        arc_lo = _cat(np.where(o, b_far + f0, a0), (s_max[ci] + n0)[o])
+        arc_hi = _cat(np.where(o, b_far + f1, a0 + span_in), (s_max[ci] + n1)[o])
+        arc_cam = _cat(camera, camera[o])
+        # rays as segments ra + t rd, t in [0, 1]: theta0 ray outwards, theta1 ray inwards
+        ra = _cat(apex, apex + radius * u1)
+        rd = _cat(radius * u0, -radius * u1)
+        rcam = _cat(camera, camera)
+        rlo = _cat(lam_in[:q], radius - lam_out[q:]) / radius
+        rhi = _cat(lam_out[:q], radius - lam_in[q:]) / radius
         rhi = np.maximum(rhi, rlo)
-        inside = rhi > rlo
-        # cover of each in-room ray by the other cameras' cones (open cones), as a dense
-        # (ray, cone) table: the same arithmetic as _clip_pairs, without fancy indexing
+        self._rays(camera, apex, u0, u1, ra, rd, rcam, rlo, rhi)
+        self._pieces(v, d, arc_cam, arc_lo, arc_hi)
+
+    def _chain_pos(self, x, length):
+        """Offsets ``x`` (boundary positions minus a chain's start) wrapped onto a chain
+        of ``length`` edges: [0, length]; a rounding error before the start counts as 0,
+        after the end as ``length``."""
+        x = np.mod(x, self._E)
+        return np.where(x > length, np.where(x > 0.5 * (length + self._E), 0.0, length), x)
+
+    def _cross_chain(self, p, u, front):
+        """Where rays ``p + lam u`` cross the shrunk room's boundary.
+
+        front=True: the exit, on the chain of edges facing u (outward normal . u > 0);
+        False: the entry, on the other chain. Bisection on the side of the chain's
+        vertices, which is monotone along the chain.
+
+        Returns lam (r,) metres along unit u, and the boundary position s (r,).
+        """
+        vs, ds, E = self._vs, self._ds, self._E
+        r = p.shape[0]
+        if r == 0:
+            return np.empty(0), np.empty(0)
+        b0 = self._beta2[0]
+        phi = np.arctan2(u[:, 1], u[:, 0])
+        x = b0 + np.mod(phi - 0.5 * np.pi - b0, 2 * np.pi)
+        start = np.searchsorted(self._beta2, x, side="right")
+        end = np.searchsorted(self._beta2, x + np.pi, side="left")
+        if front:
+            base, length, sgn = start, end - start, 1.0
+        else:
+            base, length, sgn = end, start + E - end, -1.0
+        lo = np.zeros(r, dtype=np.intp)
+        hi = length.astype(np.intp)
+        while True:
+            wide = hi - lo > 1
+            if not wide.any():
+                break
+            mid = (lo + hi) // 2
+            vm = vs[(base + mid) % E]
+            w = sgn * (u[:, 0] * (vm[:, 1] - p[:, 1]) - u[:, 1] * (vm[:, 0] - p[:, 0]))
+            left = wide & (w <= 0)
+            lo = np.where(left, mid, lo)
+            hi = np.where(wide & ~left, mid, hi)
+        e = (base + lo) % E
+        a, de = vs[e], ds[e]
+        den = u[:, 0] * de[:, 1] - u[:, 1] * de[:, 0]
+        ax, ay = a[:, 0] - p[:, 0], a[:, 1] - p[:, 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = (ax * de[:, 1] - ay * de[:, 0]) / den
+            t = (ax * u[:, 1] - ay * u[:, 0]) / den
+        ok = den != 0
+        t = np.where(ok, np.clip(t, 0.0, 1.0), 0.0)
+        return np.where(ok, lam, 0.0), e + t
+
+    def _rays(self, camera, apex, u0, u1, ra, rd, rcam, rlo, rhi):
+        """Cover of each in-room ray piece by the other cameras' open cones, as a dense
+        (ray, cone) table of parameter intervals (the arithmetic of ``cone_areas``)."""
+        nr, q = ra.shape[0], camera.size
         px = ra[:, None, 0] - apex[None, :, 0]
         py = ra[:, None, 1] - apex[None, :, 1]
         dx, dy = rd[:, None, 0], rd[:, None, 1]
@@ -297,69 +361,66 @@ class UnionAreas:
             hi = np.where((be == 0) & (al <= 0), -1.0, hi)
         lo = np.maximum(lo, rlo[:, None])
         hi = np.minimum(hi, rhi[:, None])
-        use = (hi > lo) & (camera[None, :] != rcam[:, None]) & inside[:, None]
+        use = (hi > lo) & (camera[None, :] != rcam[:, None]) & (rhi > rlo)[:, None]
         rj, cj = np.nonzero(use)
         self.ray_len = rhi - rlo
         self.ray_w = 0.5 * (ra[:, 0] * rd[:, 1] - ra[:, 1] * rd[:, 0])
         self.rcam = rcam
-        self.room_w = 0.5 * (a[:, 0] * d[:, 1] - a[:, 1] * d[:, 0])
-        self.E = E
-        self._pieces(camera, E, fullc, room_iv,
-                     (camera[cj], rj, lo[rj, cj], hi[rj, cj]))
+        self._ray_iv = (camera[cj], rj, lo[rj, cj], hi[rj, cj])
 
-    def _pieces(self, camera, E, fullc, room, rays):
-        """Cut every room edge and ray into pieces of constant cover: piece weights
-        ``v`` (boundary integrand times length), cover table ``M`` (P, n) and the ray
-        camera of each piece (-1 for room edges)."""
-        n = self.n
-        ecam, eitem, elo, ehi = room
-        rcam_i, ritem, rlo, rhi = rays
-        keep = ehi > elo
-        ecam, eitem, elo, ehi = ecam[keep], eitem[keep], elo[keep], ehi[keep]
-        pe = np.unique(eitem)  # room edges cut by a cone's ray: sentinels at 0 and 1
-        item = np.concatenate([eitem, eitem, pe, pe, ritem + E, ritem + E])
-        pos = np.concatenate([elo, ehi, np.zeros(pe.size), np.ones(pe.size), rlo, rhi])
-        cam = np.concatenate([ecam, ecam, np.zeros(2 * pe.size, np.intp), rcam_i, rcam_i])
-        sgn = np.concatenate([np.ones(eitem.size), -np.ones(eitem.size),
-                              np.zeros(2 * pe.size), np.ones(ritem.size),
-                              -np.ones(ritem.size)])
-        order = np.argsort(2.0 * item + pos, kind="stable")
+    def _pieces(self, v, d, arc_cam, arc_lo, arc_hi):
+        """Cut the boundary (at the arcs' ends) and every ray (at its covering cones'
+        ends) into pieces of constant cover: piece weights ``v`` (boundary integrand
+        over the piece), covers (``bits`` or ``M`` (P, n)) and the ray camera of each
+        piece (-1 on the room's boundary)."""
+        n, E = self.n, self._E
+        room_w = 0.5 * (v[:, 0] * d[:, 1] - v[:, 1] * d[:, 0])  # per unit of s on edge e
+        cum = _cat(0.0, np.cumsum(room_w))
+        shift = np.floor(arc_lo / E) * E
+        lo, hi = arc_lo - shift, arc_hi - shift  # lo in [0, E), hi in [lo, lo + E]
+        over = hi > E
+        alo = _cat(lo, np.zeros(over.sum()))
+        ahi = _cat(np.minimum(hi, E), hi[over] - E)
+        acam = _cat(arc_cam, arc_cam[over])
+        rcam_i, ritem, rlo, rhi = self._ray_iv
+        na, nv = acam.size, ritem.size
+        pos = np.concatenate([alo, ahi, [0.0, float(E)], rlo, rhi])
+        item = np.concatenate([np.full(2 * na + 2, -1), ritem, ritem])
+        cam = np.concatenate([acam, acam, [0, 0], rcam_i, rcam_i]).astype(np.intp)
+        sgn = np.concatenate([np.ones(na), -np.ones(na), [0.0, 0.0],
+                              np.ones(nv), -np.ones(nv)])
+        key = np.where(item < 0, pos, E + 1.0 + 2.0 * item + pos)
+        order = np.argsort(key, kind="stable")
         item, pos, cam, sgn = item[order], pos[order], cam[order], sgn[order]
         same = item[1:] == item[:-1]
-        length = np.where(same, pos[1:] - pos[:-1], 0.0)
         it = item[:-1]
-        edge = it < E
-        ie = np.minimum(it, E - 1)
-        ir = np.maximum(it - E, 0)
-        v = length * np.where(edge, self.room_w[ie], self.ray_w[ir])
-        pc = np.where(edge, -1, self.rcam[ir])
-        # whole room edges without cuts: one piece each, covered by fullc
-        whole = np.ones(E, bool)
-        whole[pe] = False
-        whole &= fullc.any(axis=0)
-        we = np.flatnonzero(whole)
+        room = it < 0
+        ir = np.maximum(it, 0)
+
+        def boundary(s):  # boundary integral from s = 0 to s
+            e = np.minimum(np.floor(s).astype(np.intp), E - 1)
+            return cum[e] + (s - e) * room_w[e]
+
+        length = np.where(same, pos[1:] - pos[:-1], 0.0)
+        rw, rc = _cat(self.ray_w, 0.0), _cat(self.rcam, -1)  # padded: there may be no rays
+        w = np.where(room, boundary(pos[1:]) - boundary(pos[:-1]), length * rw[ir])
+        pc = np.where(room, -1, rc[ir])
         if n <= 62:
             # a camera's cones are disjoint, so the running sum of +-2**camera is the
             # bitmask of the cameras covering each piece (exact in int64)
-            fb = ((fullc > 0).T.astype(np.int64) << np.arange(n)).sum(axis=1)
             cover = np.cumsum(sgn.astype(np.int64) << cam)[:-1]
-            cover |= np.where(edge, fb[ie], 0)
             sel = (length > 0) & (cover != 0)
-            self.bits = np.concatenate([cover[sel], fb[we]])
-            self.M = None
+            self.bits, self.M = cover[sel], None
         else:
             delta = np.zeros((n, item.size))
             delta[cam, np.arange(item.size)] = sgn
             cover = (np.cumsum(delta, axis=1)[:, :-1] > 0.5).T
-            cover |= edge[:, None] & (fullc[:, ie].T > 0)
             sel = (length > 0) & cover.any(axis=1)
-            self.M = np.concatenate([cover[sel], fullc[:, we].T > 0]).astype(float)
-            self.bits = None
-        self.v = np.concatenate([v[sel], self.room_w[we]])
-        self.pc = np.concatenate([pc[sel], np.full(we.size, -1)])
+            self.M, self.bits = cover[sel].astype(float), None
+        self.v, self.pc = w[sel], pc[sel]
         self.W = self.ray_w * self.ray_len  # (nr,) a ray's whole integrand
         if self.bits is not None:
-            # bit tables for the call: room-edge pieces count if covered; ray pieces
+            # bit tables for the call: boundary pieces count if covered; ray pieces
             # (negative) if covered and the ray's camera is in the set
             ray = self.pc >= 0
             self._eb, self._ev = self.bits[~ray], self.v[~ray]
