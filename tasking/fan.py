@@ -20,11 +20,15 @@ of cones (:class:`UnionAreas`): the boundary of ``room ∩ ⋃ C`` is made of th
 room's edges inside some cone and the parts of the cones' rays inside the room and outside
 every other camera's cone; on a straight piece ``a + t d`` the integrand
 ``1/2 cross(p, dp)`` is the constant ``1/2 cross(a, d)``, so each piece contributes that
-constant times the measure of its parameter set. Per camera set this is a union of
-intervals per edge or ray: pure numpy, no polygon overlay.
+constant times the measure of its parameter set. A cone covers one arc of the room's
+boundary (two for an apex outside the room), found from where its rays cross the
+boundary; per camera set the area is a sum over pieces of constant cover: pure numpy, no
+polygon overlay.
 """
 
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 import shapely
@@ -165,6 +169,117 @@ def _prev(x, axis=0):
                            x[(slice(None),) * axis + (slice(0, -1),)]], axis=axis)
 
 
+class _Ring:
+    """A convex room's ring (CCW, E edges) and the same ring shrunk by ``delta`` (1e-12
+    of its size): ``vs``, ``ds`` (E, 2); outward normal angles ``beta2`` (2E,),
+    increasing, twice around; boundary integrand ``room_w`` per unit of s on each edge
+    and its running sum ``cum`` (E + 1,)."""
+
+    def __init__(self, room_xy):
+        v = room_xy
+        d = np.diff(v, axis=0)
+        real = np.any(d != 0, axis=1)
+        v, d = v[:-1][real], d[real]
+        if np.sum(v[:, 0] * d[:, 1] - v[:, 1] * d[:, 0]) < 0:
+            v = v[::-1]
+            d = _next(v) - v
+        self.E = v.shape[0]
+        ln = np.hypot(d[:, 0], d[:, 1])
+        delta = 1e-12 * float(np.ptp(v, axis=0).max())
+        nin = np.stack((-d[:, 1], d[:, 0]), axis=-1) / ln[:, None]  # inward normals
+        npr = _prev(nin)
+        self.vs = v + delta * (npr + nin) / (1.0 + np.sum(npr * nin, axis=1))[:, None]
+        self.ds = _next(self.vs) - self.vs
+        beta = np.maximum.accumulate(np.unwrap(np.arctan2(-d[:, 0], d[:, 1])))
+        self.beta2 = _cat(beta, beta + 2 * np.pi)
+        self.room_w = 0.5 * (v[:, 0] * d[:, 1] - v[:, 1] * d[:, 0])
+        self.cum = _cat(0.0, np.cumsum(self.room_w))
+
+    def chain_pos(self, x, length):
+        """Offsets ``x`` (boundary positions minus a chain's start) wrapped onto a chain
+        of ``length`` edges: [0, length]; a rounding error before the start counts as 0,
+        after the end as ``length``."""
+        x = np.mod(x, self.E)
+        return np.where(x > length, np.where(x > 0.5 * (length + self.E), 0.0, length), x)
+
+    def boundary(self, s):
+        """Boundary integral ``1/2 cross(x, dx)`` from s = 0 to s (s in [0, E])."""
+        e = np.minimum(s.astype(np.intp), self.E - 1)
+        return self.cum[e] + (s - e) * self.room_w[e]
+
+    def crossings(self, p, u):
+        """Where rays ``p + lam u`` (u unit, (r, 2)) leave and enter the shrunk room.
+
+        The exit is on the chain of edges facing u (outward normal . u > 0), the entry on
+        the other chain; along each chain the side of the vertices w.r.t. the ray's line
+        is monotone, so a bisection finds the crossed edge (O(log E) per ray).
+
+        Returns lam_out, s_out, lam_in, s_in: (r,) each; lam in metres along u, s the
+        boundary position ``edge + fraction``.
+        """
+        vs, ds, E = self.vs, self.ds, self.E
+        r = p.shape[0]
+        phi = np.arctan2(u[:, 1], u[:, 0])
+        b0 = self.beta2[0]
+        x = b0 + np.mod(phi - 0.5 * np.pi - b0, 2 * np.pi)
+        start = np.searchsorted(self.beta2, x, side="right")
+        end = np.searchsorted(self.beta2, x + np.pi, side="left")
+        # rows [0, r): exits on the front chain; [r, 2r): entries on the back chain
+        base = _cat(start, end)
+        hi = _cat(end - start, start + E - end)
+        sgn = _cat(np.ones(r), -np.ones(r))
+        pp, uu = _cat(p, p), _cat(u, u)
+        ux, uy, px, py = sgn * uu[:, 0], sgn * uu[:, 1], pp[:, 0], pp[:, 1]
+        lo = np.zeros(2 * r, dtype=np.intp)
+        for _ in range(max(1, int(E).bit_length())):
+            mid = (lo + hi) >> 1
+            vm = vs[(base + mid) % E]
+            left = ux * (vm[:, 1] - py) <= uy * (vm[:, 0] - px)
+            lo = np.where(left, mid, lo)
+            hi = np.where(left, hi, mid)
+        e = (base + lo) % E
+        a, de = vs[e], ds[e]
+        den = uu[:, 0] * de[:, 1] - uu[:, 1] * de[:, 0]
+        ax, ay = a[:, 0] - px, a[:, 1] - py
+        ok = den != 0
+        den = np.where(ok, den, 1.0)
+        lam = np.where(ok, (ax * de[:, 1] - ay * de[:, 0]) / den, 0.0)
+        t = np.where(ok, np.clip((ax * uu[:, 1] - ay * uu[:, 0]) / den, 0.0, 1.0), 0.0)
+        s = e + t
+        return lam[:r], s[:r], lam[r:], s[r:]
+
+
+@lru_cache(maxsize=8)
+def _ring_cached(key: bytes, shape: tuple) -> _Ring:
+    return _Ring(np.frombuffer(key).reshape(shape))
+
+
+def _shrunk_ring(room_xy: np.ndarray) -> _Ring:
+    """:class:`_Ring` of a closed (V+1, 2) ring, cached: rooms repeat frame after frame."""
+    return _ring_cached(room_xy.tobytes(), room_xy.shape)
+
+
+def _tangents(ring: _Ring, cap: np.ndarray):
+    """Per apex (nc, 2): outside the shrunk room?, and if so the boundary positions of
+    the tangent vertices seen at the smallest and largest angles ``s_min``, ``s_max``,
+    the far chain's length ``far`` (edges from s_min to s_max), ``a_min`` and the
+    angular width of the room seen from the apex, radians."""
+    vs, ds, E = ring.vs, ring.ds, ring.E
+    # edge e is visible from an apex outside its line
+    vis = (ds[None, :, 0] * (cap[:, None, 1] - vs[None, :, 1])
+           < ds[None, :, 1] * (cap[:, None, 0] - vs[None, :, 0]))  # (nc, E)
+    out = vis.any(axis=1)
+    first = np.argmax(vis & ~_prev(vis, axis=1), axis=1)  # near chain's first edge
+    last = np.argmax(vis & ~_next(vis, axis=1), axis=1)  # and last edge
+    s_max = first.astype(float)
+    s_min = ((last + 1) % E).astype(float)
+    far = np.mod(s_max - s_min, E)
+    tmin, tmax = vs[(last + 1) % E] - cap, vs[first] - cap
+    a_min = np.arctan2(tmin[:, 1], tmin[:, 0])
+    width = np.mod(np.arctan2(tmax[:, 1], tmax[:, 0]) - a_min, 2 * np.pi)
+    return out, s_min, s_max, far, a_min, width
+
+
 class UnionAreas:
     """Exact areas ``area(room ∩ ⋃_{c in T} wedges[c])`` for many camera sets T at once.
 
@@ -201,67 +316,38 @@ class UnionAreas:
         keep = t1 > t0
         camera, apex, t0, t1 = camera[keep], apex[keep], t0[keep], t1[keep]
         self.n = n
-        v = np.asarray(room_xy, dtype=float)
-        d = np.diff(v, axis=0)
-        v, d = v[:-1][np.any(d != 0, axis=1)], d[np.any(d != 0, axis=1)]
-        if np.sum(v[:, 0] * d[:, 1] - v[:, 1] * d[:, 0]) < 0:
-            v = v[::-1]
-            d = _next(v) - v
-        E = v.shape[0]
-        ln = np.hypot(d[:, 0], d[:, 1])
-        delta = 1e-12 * float(np.ptp(v, axis=0).max())
-        # the shrunk room: every edge moved delta inwards (inward normal nin)
-        nin = np.stack((-d[:, 1], d[:, 0]), axis=-1) / ln[:, None]
-        npr = _prev(nin)
-        vs = v + delta * (npr + nin) / (1.0 + np.sum(npr * nin, axis=1))[:, None]
-        ds = _next(vs) - vs
-        # outward normal angle of every edge, increasing around the ring (by 2 pi)
-        beta = np.maximum.accumulate(np.unwrap(np.arctan2(-d[:, 0], d[:, 1])))
-        self._vs, self._ds, self._E = vs, ds, E
-        self._beta2 = _cat(beta, beta + 2 * np.pi)
+        ring = _shrunk_ring(np.ascontiguousarray(room_xy, dtype=float))
+        self._ring, E = ring, ring.E
         q = camera.size
         # cameras: inside the shrunk room, or outside with a near chain of visible edges
         g = np.flatnonzero(_cat(True, camera[1:] != camera[:-1])) if q else np.empty(0, int)
-        cap = apex[g]  # (nc, 2) one apex per camera with cones
-        rel = cap[:, None, :] - vs[None, :, :]
-        vis = ds[None, :, 0] * rel[:, :, 1] - ds[None, :, 1] * rel[:, :, 0] < 0  # (nc, E)
-        out = vis.any(axis=1)
-        first = np.argmax(vis & ~_prev(vis, axis=1), axis=1)  # near chain's first edge
-        last = np.argmax(vis & ~_next(vis, axis=1), axis=1)  # and last edge
-        s_max = first.astype(float)  # tangent vertex seen at the largest angle
-        s_min = ((last + 1) % E).astype(float)  # ... at the smallest angle
-        far = np.mod(s_max - s_min, E)  # far chain: [s_min, s_min + far]
-        tmin, tmax = vs[(last + 1) % E] - cap, vs[first] - cap
-        a_min = np.arctan2(tmin[:, 1], tmin[:, 0])
-        width = np.mod(np.arctan2(tmax[:, 1], tmax[:, 0]) - a_min, 2 * np.pi)
+        out, s_min, s_max, far, a_min, width = _tangents(ring, apex[g])
         # per cone: clip outside cameras' cones to the directions that meet the room
         ci = np.repeat(np.arange(g.size), np.diff(_cat(g, q)))
-        o = out[ci]
-        lo = np.mod(t0 - a_min[ci], 2 * np.pi)
+        o, a_min, width = out[ci], a_min[ci], width[ci]
+        lo = np.mod(t0 - a_min, 2 * np.pi)
         hi = lo + (t1 - t0)
-        wrap = (lo > width[ci]) & (hi >= 2 * np.pi)
+        wrap = (lo > width) & (hi >= 2 * np.pi)
         lo, hi = np.where(wrap, 0.0, lo), np.where(wrap, hi - 2 * np.pi, hi)
-        hit = ~o | (lo < width[ci])
         clip0 = o & (lo <= 0.0)
-        clip1 = o & (hi >= width[ci])
-        hi = np.minimum(hi, width[ci])
-        th0 = np.where(o, a_min[ci] + lo, t0)
-        th1 = np.where(o, a_min[ci] + hi, t1)
-        sel = hit & (~o | (hi > lo))
-        camera, apex, ci, o = camera[sel], apex[sel], ci[sel], o[sel]
-        th0, th1, clip0, clip1 = th0[sel], th1[sel], clip0[sel], clip1[sel]
+        clip1 = o & (hi >= width)
+        hi = np.minimum(hi, width)
+        sel = ~o | ((lo < width) & (hi > lo))
+        th0 = np.where(o, a_min + lo, t0)[sel]
+        th1 = np.where(o, a_min + hi, t1)[sel]
+        camera, apex, o, clip0, clip1 = camera[sel], apex[sel], o[sel], clip0[sel], clip1[sel]
+        s_min, s_max, far = s_min[ci[sel]], s_max[ci[sel]], far[ci[sel]]
         q = camera.size
-        u0 = np.stack((np.cos(th0), np.sin(th0)), axis=-1)
-        u1 = np.stack((np.cos(th1), np.sin(th1)), axis=-1)
+        th = _cat(th0, th1)
+        ua = np.stack((np.cos(th), np.sin(th)), axis=-1)
+        u0, u1 = ua[:q], ua[q:]
         # where the two rays of every cone leave (and enter) the shrunk room
-        pa, ua = _cat(apex, apex), _cat(u0, u1)
-        lam_out, s_out = self._cross_chain(pa, ua, front=True)
-        lam_in, s_in = self._cross_chain(pa, ua, front=False)
+        lam_out, s_out, lam_in, s_in = ring.crossings(_cat(apex, apex), ua)
         oo = _cat(o, o)
         lam_in = np.where(oo, np.maximum(lam_in, 0.0), 0.0)
         # a ray clipped to a tangent direction only touches the room, at the tangent vertex
         tang = _cat(clip0, clip1)
-        s_tan = _cat(s_min[ci], s_max[ci])
+        s_tan = _cat(s_min, s_max)
         s_out = np.where(tang, s_tan, s_out)
         s_in = np.where(tang, s_tan, s_in)
         lam_out = np.where(tang, lam_in, np.maximum(lam_out, lam_in))
@@ -269,15 +355,13 @@ class UnionAreas:
         # outside) from entry(theta1) to entry(theta0), both counter-clockwise
         a0, a1 = s_out[:q], s_out[q:]
         span_in = np.mod(a1 - a0, E)
-        same = (np.floor(a0) == np.floor(a1)) & (a1 < a0)
-        span_in = np.where(same, 0.0, span_in)
-        b_far = s_min[ci]
-        f0 = self._chain_pos(a0 - b_far, far[ci])
-        f1 = np.maximum(self._chain_pos(a1 - b_far, far[ci]), f0)
-        n0 = self._chain_pos(s_in[q:] - s_max[ci], E - far[ci])
-        n1 = np.maximum(self._chain_pos(s_in[:q] - s_max[ci], E - far[ci]), n0)
-        arc_lo = _cat(np.where(o, b_far + f0, a0), (s_max[ci] + n0)[o])
-        arc_hi = _cat(np.where(o, b_far + f1, a0 + span_in), (s_max[ci] + n1)[o])
+        span_in = np.where((np.floor(a0) == np.floor(a1)) & (a1 < a0), 0.0, span_in)
+        f0 = ring.chain_pos(a0 - s_min, far)
+        f1 = np.maximum(ring.chain_pos(a1 - s_min, far), f0)
+        n0 = ring.chain_pos(s_in[q:] - s_max, E - far)
+        n1 = np.maximum(ring.chain_pos(s_in[:q] - s_max, E - far), n0)
+        arc_lo = _cat(np.where(o, s_min + f0, a0), (s_max + n0)[o])
+        arc_hi = _cat(np.where(o, s_min + f1, a0 + span_in), (s_max + n1)[o])
         arc_cam = _cat(camera, camera[o])
         # rays as segments ra + t rd, t in [0, 1]: theta0 ray outwards, theta1 ray inwards
         ra = _cat(apex, apex + radius * u1)
@@ -287,59 +371,7 @@ class UnionAreas:
         rhi = _cat(lam_out[:q], radius - lam_in[q:]) / radius
         rhi = np.maximum(rhi, rlo)
         self._rays(camera, apex, u0, u1, ra, rd, rcam, rlo, rhi)
-        self._pieces(v, d, arc_cam, arc_lo, arc_hi)
-
-    def _chain_pos(self, x, length):
-        """Offsets ``x`` (boundary positions minus a chain's start) wrapped onto a chain
-        of ``length`` edges: [0, length]; a rounding error before the start counts as 0,
-        after the end as ``length``."""
-        x = np.mod(x, self._E)
-        return np.where(x > length, np.where(x > 0.5 * (length + self._E), 0.0, length), x)
-
-    def _cross_chain(self, p, u, front):
-        """Where rays ``p + lam u`` cross the shrunk room's boundary.
-
-        front=True: the exit, on the chain of edges facing u (outward normal . u > 0);
-        False: the entry, on the other chain. Bisection on the side of the chain's
-        vertices, which is monotone along the chain.
-
-        Returns lam (r,) metres along unit u, and the boundary position s (r,).
-        """
-        vs, ds, E = self._vs, self._ds, self._E
-        r = p.shape[0]
-        if r == 0:
-            return np.empty(0), np.empty(0)
-        b0 = self._beta2[0]
-        phi = np.arctan2(u[:, 1], u[:, 0])
-        x = b0 + np.mod(phi - 0.5 * np.pi - b0, 2 * np.pi)
-        start = np.searchsorted(self._beta2, x, side="right")
-        end = np.searchsorted(self._beta2, x + np.pi, side="left")
-        if front:
-            base, length, sgn = start, end - start, 1.0
-        else:
-            base, length, sgn = end, start + E - end, -1.0
-        lo = np.zeros(r, dtype=np.intp)
-        hi = length.astype(np.intp)
-        while True:
-            wide = hi - lo > 1
-            if not wide.any():
-                break
-            mid = (lo + hi) // 2
-            vm = vs[(base + mid) % E]
-            w = sgn * (u[:, 0] * (vm[:, 1] - p[:, 1]) - u[:, 1] * (vm[:, 0] - p[:, 0]))
-            left = wide & (w <= 0)
-            lo = np.where(left, mid, lo)
-            hi = np.where(wide & ~left, mid, hi)
-        e = (base + lo) % E
-        a, de = vs[e], ds[e]
-        den = u[:, 0] * de[:, 1] - u[:, 1] * de[:, 0]
-        ax, ay = a[:, 0] - p[:, 0], a[:, 1] - p[:, 1]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lam = (ax * de[:, 1] - ay * de[:, 0]) / den
-            t = (ax * u[:, 1] - ay * u[:, 0]) / den
-        ok = den != 0
-        t = np.where(ok, np.clip(t, 0.0, 1.0), 0.0)
-        return np.where(ok, lam, 0.0), e + t
+        self._pieces(arc_cam, arc_lo, arc_hi)
 
     def _rays(self, camera, apex, u0, u1, ra, rd, rcam, rlo, rhi):
         """Cover of each in-room ray piece by the other cameras' open cones, as a dense
@@ -368,43 +400,42 @@ class UnionAreas:
         self.rcam = rcam
         self._ray_iv = (camera[cj], rj, lo[rj, cj], hi[rj, cj])
 
-    def _pieces(self, v, d, arc_cam, arc_lo, arc_hi):
+    def _pieces(self, arc_cam, arc_lo, arc_hi):
         """Cut the boundary (at the arcs' ends) and every ray (at its covering cones'
         ends) into pieces of constant cover: piece weights ``v`` (boundary integrand
         over the piece), covers (``bits`` or ``M`` (P, n)) and the ray camera of each
-        piece (-1 on the room's boundary)."""
-        n, E = self.n, self._E
-        room_w = 0.5 * (v[:, 0] * d[:, 1] - v[:, 1] * d[:, 0])  # per unit of s on edge e
-        cum = _cat(0.0, np.cumsum(room_w))
+        piece (-1 on the room's boundary). Ties in the sorts only order pieces of zero
+        length, which are dropped."""
+        n, ring = self.n, self._ring
+        E = ring.E
         shift = np.floor(arc_lo / E) * E
         lo, hi = arc_lo - shift, arc_hi - shift  # lo in [0, E), hi in [lo, lo + E]
         over = hi > E
-        alo = _cat(lo, np.zeros(over.sum()))
-        ahi = _cat(np.minimum(hi, E), hi[over] - E)
-        acam = _cat(arc_cam, arc_cam[over])
+        na = arc_cam.size + int(over.sum())
+        # boundary events (start, end of every arc; sentinels at 0 and E)
+        bpos = np.concatenate([lo, np.zeros(na - lo.size), np.minimum(hi, E), hi[over] - E,
+                               [0.0, float(E)]])
+        bcam = np.concatenate([arc_cam, arc_cam[over], arc_cam, arc_cam[over], [0, 0]])
+        bsgn = np.concatenate([np.ones(na), -np.ones(na), [0.0, 0.0]])
+        order = np.argsort(bpos)
+        bpos, bcam, bsgn = bpos[order], bcam[order], bsgn[order]
+        bint = ring.boundary(bpos)
+        # ray events, sorted by ray then position (ray item r at keys [2r, 2r + 1])
         rcam_i, ritem, rlo, rhi = self._ray_iv
-        na, nv = acam.size, ritem.size
-        pos = np.concatenate([alo, ahi, [0.0, float(E)], rlo, rhi])
-        item = np.concatenate([np.full(2 * na + 2, -1), ritem, ritem])
-        cam = np.concatenate([acam, acam, [0, 0], rcam_i, rcam_i]).astype(np.intp)
-        sgn = np.concatenate([np.ones(na), -np.ones(na), [0.0, 0.0],
-                              np.ones(nv), -np.ones(nv)])
-        key = np.where(item < 0, pos, E + 1.0 + 2.0 * item + pos)
-        order = np.argsort(key, kind="stable")
-        item, pos, cam, sgn = item[order], pos[order], cam[order], sgn[order]
-        same = item[1:] == item[:-1]
-        it = item[:-1]
-        room = it < 0
-        ir = np.maximum(it, 0)
-
-        def boundary(s):  # boundary integral from s = 0 to s
-            e = np.minimum(np.floor(s).astype(np.intp), E - 1)
-            return cum[e] + (s - e) * room_w[e]
-
-        length = np.where(same, pos[1:] - pos[:-1], 0.0)
-        rw, rc = _cat(self.ray_w, 0.0), _cat(self.rcam, -1)  # padded: there may be no rays
-        w = np.where(room, boundary(pos[1:]) - boundary(pos[:-1]), length * rw[ir])
-        pc = np.where(room, -1, rc[ir])
+        rpos = np.concatenate([rlo, rhi])
+        rit = np.concatenate([ritem, ritem])
+        order = np.argsort(2.0 * rit + rpos)
+        rpos, rit = rpos[order], rit[order]
+        rcam_e = np.concatenate([rcam_i, rcam_i])[order]
+        rsgn = np.concatenate([np.ones(ritem.size), -np.ones(ritem.size)])[order]
+        rlen = np.where(rit[1:] == rit[:-1], rpos[1:] - rpos[:-1], 0.0)
+        blen = bpos[1:] - bpos[:-1]
+        cam = np.concatenate([bcam, rcam_e]).astype(np.intp)
+        npc = cam.size - 1  # pieces between consecutive events (boundary, then rays)
+        length = np.concatenate([blen, [0.0], rlen])[:npc]
+        w = np.concatenate([bint[1:] - bint[:-1], [0.0], rlen * self.ray_w[rit[:-1]]])[:npc]
+        pc = np.concatenate([np.full(blen.size + 1, -1), self.rcam[rit[:-1]]])[:npc]
+        sgn = np.concatenate([bsgn, rsgn])
         if n <= 62:
             # a camera's cones are disjoint, so the running sum of +-2**camera is the
             # bitmask of the cameras covering each piece (exact in int64)
@@ -412,8 +443,8 @@ class UnionAreas:
             sel = (length > 0) & (cover != 0)
             self.bits, self.M = cover[sel], None
         else:
-            delta = np.zeros((n, item.size))
-            delta[cam, np.arange(item.size)] = sgn
+            delta = np.zeros((n, cam.size))
+            delta[cam, np.arange(cam.size)] = sgn
             cover = (np.cumsum(delta, axis=1)[:, :-1] > 0.5).T
             sel = (length > 0) & cover.any(axis=1)
             self.M, self.bits = cover[sel].astype(float), None
