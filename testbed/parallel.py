@@ -78,9 +78,17 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
         finally:
             client.close()
         return
+    import dask
+
     n = default_workers() if workers is None else int(workers)
-    with warnings.catch_warnings():  # "port 8787 in use" when several clusters run
-        warnings.simplefilter("ignore", UserWarning)
+    # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers; any explicit glibc
+    # threshold turns off glibc's dynamic mmap threshold, so every large numpy temporary
+    # is mmapped and page-faulted afresh: the node pipeline ran 2.2x slower (98 vs 217
+    # ms per 16-camera frame, docs/performance.md). Workers keep glibc's defaults.
+    spawn_env = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ").items()
+                 if not k.startswith("MALLOC_")}
+    with warnings.catch_warnings(), dask.config.set({"distributed.nanny.pre-spawn-environ": spawn_env}):
+        warnings.simplefilter("ignore", UserWarning)  # "port 8787 in use" when several clusters run
         cluster = LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
             silence_logs=logging.CRITICAL, **({"env": dict(worker_env)} if worker_env else {}),

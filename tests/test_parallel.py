@@ -1,0 +1,16 @@
+"""The local Dask cluster's workers: environment."""
+
+import os
+
+from testbed.parallel import open_client
+
+
+def _env():
+    return {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "OMP_NUM_THREADS", "LP_NUM_THREADS")}
+
+
+def test_workers_keep_glibc_malloc_defaults():
+    # Dask's nanny would set MALLOC_TRIM_THRESHOLD_, which makes numpy temporaries slow
+    with open_client(1, worker_env={"LP_NUM_THREADS": "1"}) as client:
+        envs = list(client.run(_env).values())
+    assert envs == [{"MALLOC_TRIM_THRESHOLD_": None, "OMP_NUM_THREADS": "1", "LP_NUM_THREADS": "1"}]
