@@ -30,6 +30,7 @@ import cv2
 import numpy as np
 
 from scene.camera import Camera
+from testbed.png import write_png  # noqa: F401  (re-exported: the dataset writers' PNG writer)
 
 
 def frame_name(index: int) -> str:
@@ -67,14 +68,6 @@ def read_calibration(path: str | os.PathLike) -> dict:
         }
     finally:
         fs.release()
-
-
-def write_png(path: Path, image: np.ndarray) -> None:
-    """Write an (H, W, 3) RGB or (H, W) single-channel uint8 image as PNG (deterministic)."""
-    if image.ndim == 3:
-        image = cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
-    if not cv2.imwrite(str(path), image, [cv2.IMWRITE_PNG_COMPRESSION, 1]):
-        raise OSError(f"cannot write {path}")
 
 
 def check_output_dir(out: str | os.PathLike, overwrite: bool) -> Path:

@@ -104,10 +104,19 @@ def sha256_file(path: Path) -> str:
     return h.hexdigest()
 
 
-def checksums(root: Path) -> dict[str, str]:
-    """sha256 of every file under ``root``, keyed by the POSIX path relative to it, sorted."""
-    return {p.relative_to(root).as_posix(): sha256_file(p)
-            for p in sorted(root.rglob("*")) if p.is_file()}
+def checksums(root: Path, known: dict[str, str] | None = None) -> dict[str, str]:
+    """sha256 of every file under ``root``, keyed by the POSIX path relative to it, sorted.
+
+    known : digests already computed while writing (relative path -> hex); those files
+        are not read again
+    """
+    known = known or {}
+    out = {}
+    for p in sorted(root.rglob("*")):
+        if p.is_file():
+            rel = p.relative_to(root).as_posix()
+            out[rel] = known[rel] if rel in known else sha256_file(p)
+    return out
 
 
 def save_npz_exact(path: Path, **arrays) -> None:
@@ -215,12 +224,14 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
 
     name = episode_name(index)
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out))
+    digests: dict[str, str] = {}  # sha256 of the images, computed from the bytes written
     try:
         for sub in ("calibration", "background"):
             (tmp / sub).mkdir()
         for c in cameras:
             write_calibration(tmp / "calibration" / f"{c.name}.yaml", c)
-            write_png(tmp / "background" / f"{c.name}.png", bg[numbers.index(c.number)])
+            digests[f"background/{c.name}.png"] = write_png(tmp / "background" / f"{c.name}.png",
+                                                            bg[numbers.index(c.number)])
             for sub in ("masks", "silhouettes") + (("frames",) if config.fmt == "png" else ()):
                 (tmp / sub / c.name).mkdir(parents=True)
         videos = []
@@ -241,10 +252,10 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
                 for k, c in enumerate(cameras):
                     if videos:
                         videos[k].write(fr.rgb[k])
-                    else:
-                        write_png(tmp / "frames" / c.name / fname, fr.rgb[k])
-                    write_png(tmp / "masks" / c.name / fname, fr.labels[k])
-                    write_png(tmp / "silhouettes" / c.name / fname, sil[k])
+                    for sub, img in ((("frames", fr.rgb[k]),) if not videos else ()) + (
+                            ("masks", fr.labels[k]), ("silhouettes", sil[k])):
+                        rel = f"{sub}/{c.name}/{fname}"
+                        digests[rel] = write_png(tmp / rel, img)
                 t3 = time.perf_counter()
                 scans.append(pipe.process(fr.rgb))
                 gt = pipe.ground_truth(fr.labels)[1]
@@ -282,7 +293,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
             "silhouettes": f"bit i = person i, {np.dtype(silhouette_dtype(people.count)).name} PNG",
         }
         (tmp / "meta.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
-        files = checksums(tmp)
+        files = checksums(tmp, digests)
         seconds["total"] = time.perf_counter() - start
         seconds["finish"] = seconds["total"] - sum(v for k, v in seconds.items() if k != "total")
         final = out / name
