@@ -22,7 +22,7 @@ from shapely.geometry import Polygon
 
 # this file is bench/tasking.py: put the repository first so `tasking` is the package
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from tasking import choose_cameras, visual_hull_of_discs  # noqa: E402
+from tasking import choose_cameras, visual_hull_of_discs
 
 R_OBJ = 0.1
 FOV = np.pi

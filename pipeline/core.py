@@ -58,7 +58,7 @@ class Pipeline:
             raise ValueError("cameras: expected at least one calibrated camera")
         self.params = PipelineParams() if params is None else params
         if not isinstance(self.params, PipelineParams):
-            raise ValueError(f"params: expected PipelineParams, got {type(self.params).__name__}")  # noqa: TRY004 (input errors are ValueError)
+            raise ValueError(f"params: expected PipelineParams, got {type(self.params).__name__}")
         self.height, self.width = self.cameras[0].height, self.cameras[0].width
         self.row_stride = self.height + self.params.opening_kernel // 2
         if rectifier is None:

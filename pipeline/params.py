@@ -38,7 +38,7 @@ def check_odd_kernel(name: str, value: Any) -> int:
 def check_range(name: str, value: Any, low: float, high: float, *, low_open=False, high_open=False) -> float:
     """Return ``value`` as a float in the interval ``low``..``high`` (open ends as asked)."""
     if isinstance(value, bool):
-        raise ValueError(f"{name}: expected a number, got {value!r}")  # noqa: TRY004
+        raise ValueError(f"{name}: expected a number, got {value!r}")
     x = check_positive(name, value, allow_zero=True) if low >= 0 else float(value)
     if (x < low or (low_open and x == low)) or (x > high or (high_open and x == high)):
         lo, hi = ("(" if low_open else "["), (")" if high_open else "]")

@@ -11,6 +11,7 @@ Usage (not run as a doctest: it needs OpenGL)::
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Self
 
 import cv2
 import numpy as np
@@ -22,6 +23,9 @@ from .geometry import Lighting, Mesh, people_mesh, room_mesh
 from .noise import draw_gains_offsets, noise_pool, sense
 from .pose import projection_matrix, view_matrix
 from .raster import Rasteriser
+
+#: The default lighting (frozen, shared).
+DEFAULT_LIGHTING = Lighting()
 
 #: Clipping planes of the OpenGL cameras, metres.
 ZNEAR, ZFAR = 0.05, 50.0
@@ -82,7 +86,7 @@ class Renderer:
     Use as a context manager, or call :meth:`close`.
     """
 
-    def __init__(self, scene: Scene, cameras=None, lighting: Lighting = Lighting()):
+    def __init__(self, scene: Scene, cameras=None, lighting: Lighting = DEFAULT_LIGHTING):
         if not scene.is_calibrated:
             raise ValueError(f"scene: {scene.name!r} has floor-plane cameras only; rendering needs "
                              "calibrated cameras (K, distortion, R, t)")
@@ -127,7 +131,7 @@ class Renderer:
         self._canvas = self._work = None            # (n_cams, ch, cw, 4), with the background
 
     # -- context manager -------------------------------------------------------------
-    def __enter__(self) -> Renderer:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -76,7 +76,7 @@ class Camera:
             raise ValueError("camera.R: expected a rotation matrix")
 
     @staticmethod
-    def from_pose(number, position_world, yaw, pitch, width, height, hfov, dist, principal=None) -> "Camera":
+    def from_pose(number, position_world, yaw, pitch, width, height, hfov, dist, principal=None) -> Camera:
         """A camera at ``position_world`` (3,) metres looking along ``yaw`` tilted down by ``pitch``."""
         R = rotation_from_yaw_pitch(yaw, pitch)
         c = check_array("camera.position", position_world, (3,))

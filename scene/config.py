@@ -6,9 +6,10 @@ A scene file is parsed once with ``yaml.safe_load`` into a frozen, validated
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 import yaml
@@ -94,12 +95,12 @@ class Scene:
         return {k: tuple(n - 1 for n in nums) for k, nums in self.uniform_sets.items()}
 
     @staticmethod
-    def from_config(config: Any, *, source: str = "scene") -> "Scene":
+    def from_config(config: Any, *, source: str = "scene") -> Scene:
         """Build and validate a scene from a parsed YAML document."""
         return _parse_scene(config, source)
 
     @staticmethod
-    def from_yaml(path: str | Path) -> "Scene":
+    def from_yaml(path: str | Path) -> Scene:
         """Load a scene file."""
         path = Path(path)
         if not path.is_file():

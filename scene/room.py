@@ -37,7 +37,7 @@ class Room:
     kind: str = "rectangle"
 
     @staticmethod
-    def rectangle(width: float, depth: float, height: float) -> "Room":
+    def rectangle(width: float, depth: float, height: float) -> Room:
         """A ``width`` (x) by ``depth`` (y) room with a corner at the origin."""
         w = check_positive("room.width", width)
         d = check_positive("room.depth", depth)
@@ -45,7 +45,7 @@ class Room:
         return Room(readonly(v), check_positive("room.height", height), "rectangle")
 
     @staticmethod
-    def circle(radius: float, height: float = 2.5, n_vertices: int = 720) -> "Room":
+    def circle(radius: float, height: float = 2.5, n_vertices: int = 720) -> Room:
         """A circular room of ``radius`` centred on the origin, as a regular polygon."""
         r = check_positive("room.radius", radius)
         a = np.linspace(0.0, 2 * np.pi, n_vertices, endpoint=False)

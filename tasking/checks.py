@@ -14,27 +14,25 @@ ValueError: tasker: unknown value 'best'; expected one of uniform, greedy
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 import shapely
 from shapely.geometry import Polygon
 from shapely.geometry.base import BaseGeometry
 
-from scene.checks import check_choice  # noqa: F401  (re-exported: the one helper for choices)
+from scene.checks import check_choice
 
 __all__ = [
-    "check_choice",
-    "check_points",
     "check_angles",
-    "check_fov",
-    "check_radii",
-    "check_room",
-    "check_int",
-    "check_indices",
+    "check_cameras_outside_discs",
+    "check_choice",
     "check_discs_disjoint",
     "check_discs_in_room",
-    "check_cameras_outside_discs",
+    "check_fov",
+    "check_indices",
+    "check_int",
+    "check_points",
+    "check_radii",
+    "check_room",
 ]
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from sklearn.cluster import KMeans
 
-__all__ = ["pair_axes", "cluster_axes", "axial_distance", "clustering_select"]
+__all__ = ["axial_distance", "cluster_axes", "clustering_select", "pair_axes"]
 
 
 def axial_distance(a, b):

@@ -26,14 +26,14 @@ from shapely.geometry.base import BaseGeometry
 __all__ = [
     "ARC_POINTS",
     "MIN_GAP",
-    "wrap_angle",
-    "disc_intervals",
-    "scanline_intervals",
     "clip_to_fov",
+    "disc_intervals",
     "free_intervals",
-    "wedge_radius",
-    "wedge_polygons",
     "group_by_camera",
+    "scanline_intervals",
+    "wedge_polygons",
+    "wedge_radius",
+    "wrap_angle",
 ]
 
 #: Points on the far arc of every wedge polygon. The arc step is at most (2*pi)/8, so

@@ -30,7 +30,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon, box
 
-__all__ = ["Coverage", "coverage_cells", "subset_areas", "optimal_subset"]
+__all__ = ["Coverage", "coverage_cells", "optimal_subset", "subset_areas"]
 
 #: Subsets scored per vectorised block.
 CHUNK = 4096

@@ -33,7 +33,7 @@ from functools import lru_cache
 import numpy as np
 import shapely
 
-__all__ = ["ring_edges", "cone_areas", "split_wide", "convex_ring", "UnionAreas"]
+__all__ = ["UnionAreas", "cone_areas", "convex_ring", "ring_edges", "split_wide"]
 
 #: Pairs (cone, edge) evaluated per numpy block.
 BLOCK = 1 << 20

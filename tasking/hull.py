@@ -39,18 +39,18 @@ SLIVER = 1e-12
 
 __all__ = [
     "SLIVER",
-    "drop_slivers",
-    "free_wedges_from_discs",
-    "free_wedges_from_scanlines",
-    "empty_regions_from_discs",
-    "empty_regions_from_scanlines",
     "camera_regions_from_discs",
     "camera_regions_from_scanlines",
+    "drop_slivers",
+    "empty_regions_from_discs",
+    "empty_regions_from_scanlines",
+    "free_wedges_from_discs",
+    "free_wedges_from_scanlines",
     "hull_from_wedges",
+    "polygon_centres",
+    "prune_small",
     "visual_hull_of_discs",
     "visual_hull_of_scanlines",
-    "prune_small",
-    "polygon_centres",
 ]
 
 

@@ -44,17 +44,17 @@ from .hull import free_wedges_from_discs, hull_from_wedges
 
 __all__ = [
     "TASKERS",
+    "IncrementalTasker",
     "choose_cameras",
-    "uniform_select",
+    "greedy_remove",
+    "greedy_remove_reference",
     "greedy_select",
+    "incremental_select",
+    "incremental_select_convex",
     "lazy_greedy_select",
     "naive_greedy_select",
     "optimal_select",
-    "greedy_remove",
-    "greedy_remove_reference",
-    "incremental_select",
-    "incremental_select_convex",
-    "IncrementalTasker",
+    "uniform_select",
 ]
 
 TASKERS = ("uniform", "clustering", "optimal", "greedy", "lazy_greedy", "incremental")
@@ -152,7 +152,7 @@ def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones
     wedges = np.asarray(wedges, dtype=object)
     gain = Gains(wedges, cones)
     h = hull_from_wedges(wedges, room, list(start)) if hull is None else hull
-    taken = set(int(s) for s in start)
+    taken = {int(s) for s in start}
     cand = np.array([c for c in range(wedges.size) if c not in taken], dtype=np.intp)
     if k == 0:
         return [], h

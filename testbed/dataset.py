@@ -25,12 +25,13 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
+from typing import Self
 
 import cv2
 import numpy as np
 
 from scene.camera import Camera
-from testbed.png import write_png  # noqa: F401  (re-exported: the dataset writers' PNG writer)
+from testbed.png import write_png
 
 
 def frame_name(index: int) -> str:
@@ -101,7 +102,7 @@ class DatasetWriter:
             write_calibration(self.tmp / "calibration" / f"{c.name}.yaml", c)
         self._people = []
 
-    def __enter__(self) -> DatasetWriter:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:

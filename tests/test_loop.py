@@ -1,6 +1,7 @@
 """The tasked network loop, `camtask run` and `camtask demo`."""
 
 import json
+from itertools import pairwise
 
 import numpy as np
 import pytest
@@ -66,7 +67,7 @@ def test_greedy_beats_uniform_on_average(lab_episode):
 def test_incremental_swaps_m_cameras_per_update(lab_episode):
     scene, truth, source = lab_episode
     results = list(run_loop(scene, LoopConfig("incremental", 6, m=1, update_every=3), truth, source))
-    for a, b in zip(results, results[1:]):
+    for a, b in pairwise(results):
         changed = len(set(b.tasked) - set(a.tasked))
         assert changed <= 1
         if b.index % 3 != 0:
@@ -129,7 +130,7 @@ def test_run_end_to_end_json_and_video(tmp_path, capsys):
 
 @pytest.mark.render
 def test_interrupted_run_leaves_no_video(tmp_path, monkeypatch):
-    import testbed.loop as loop
+    from testbed import loop
 
     real, calls = loop.visual_hull_of_scanlines, []
 

@@ -57,7 +57,7 @@ def test_many_layouts_equal_the_reference(lab, lab_renderer, seed):
 def test_people_partly_inside_a_wall_are_occluded_like_the_reference(lab, lab_renderer):
     """The room's depth is copied under the people, so even a person half inside a wall
     is cut by it exactly as in the whole-scene draw (the room does occlude here)."""
-    x0, y0, x1, y1 = lab.room.polygon.bounds
+    x0, _, x1, y1 = lab.room.polygon.bounds
     positions = np.array([[x0 + 0.05, 2.0], [3.0, y1 - 0.1], [x1 + 0.1, 3.0]])
     f = lab_renderer.render(positions, clean=True)
     rgb, labels = _reference(lab_renderer, positions)

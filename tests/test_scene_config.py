@@ -1,6 +1,7 @@
 """Scene files: the built-in scenes load, and bad input gets one-line errors."""
 
 import copy
+import dataclasses
 
 import cv2
 import numpy as np
@@ -70,7 +71,7 @@ def test_rotation_is_orthonormal():
 
 def test_frozen_and_read_only():
     cam = load_scene("lab").cameras[0]
-    with pytest.raises(Exception):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         cam.number = 3
     with pytest.raises(ValueError):
         cam.K[0, 0] = 1.0

@@ -192,8 +192,8 @@ def test_optimal_never_worse_than_greedy_and_lazy_equals_greedy(seed, n, m, k):
     c = random_discs(rng, m)
     fov = rng.choice([np.pi, np.radians(49), np.radians(120)])
     w = free_wedges_from_discs(xy, yaw, fov, c, R, ROOM)
-    g, hg = greedy_select(w, ROOM, k)
-    lz, hl = lazy_greedy_select(w, ROOM, k)
+    g, _ = greedy_select(w, ROOM, k)
+    lz, _ = lazy_greedy_select(w, ROOM, k)
     assert g == lz  # same cameras in the same order
     opt = choose_cameras("optimal", k, xy, yaw, fov, c, R, ROOM)
     assert hull_from_wedges(w, ROOM, opt).area <= hull_from_wedges(w, ROOM, g).area + 1e-9
