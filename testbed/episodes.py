@@ -157,8 +157,9 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
     person alone (tests/test_dataset_render.py).
     """
     pos = np.asarray(positions_xy, float)
-    silhouette_dtype(len(pos))  # refuses more than 16 people
-    if 0 < len(pos) <= 8:
+    P, n = len(pos), len(renderer.numbers)
+    dtype = silhouette_dtype(P)
+    if 0 < P <= 8:
         return renderer.silhouettes(pos)
     return silhouettes_rerendered(renderer, pos, labels)
 

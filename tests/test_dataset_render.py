@@ -108,12 +108,7 @@ def test_silhouettes_exact_when_people_overlap(lab):
 
 def test_one_pass_silhouettes_equal_the_rerendered_ones(lab):
     """The one-pass bit draw (up to 8 people) and the re-rendering path agree bit for bit."""
-    from testbed.episodes import (
-        EpisodeConfig,
-        _renderer,
-        load_episode_scene,
-        silhouettes_rerendered,
-    )
+    from testbed.episodes import EpisodeConfig, _renderer, load_episode_scene, silhouettes_rerendered
 
     config = EpisodeConfig("lab", 4, (2, 7, 11, 16), 1, 0)
     r = _renderer(config, load_episode_scene(config))
