@@ -7,8 +7,7 @@ down so that ``glReadPixels`` returns rows top first, and one ``glReadPixels`` r
 all cameras at once into a preallocated ``(n_cams, H, W, 4)`` array: RGB is the baked
 vertex colour, interpolated across the triangle; alpha is the exact label (person
 index + 1, 0 for the room), written from a ``flat`` varying. No lighting, no MSAA, no
-blending, no face culling (the silhouette pass of :meth:`Rasteriser.draw_people` ORs
-bits into alpha with a logic op).
+blending, no face culling.
 
 :meth:`Rasteriser.draw` draws everything (the room, the benchmark floor, the tests'
 reference). The renderer's steps use :meth:`Rasteriser.draw_people`: a copy of the
@@ -40,27 +39,20 @@ uniform mat4 view_proj;
 uniform vec2 offsets[%(n)d];             // people's floor positions, metres
 out vec3 v_colour;
 flat out float v_label;
-flat out int v_person;
 void main() {
     vec3 p = position;
     if (person >= 0.0) p.xy += offsets[int(person)];
     gl_Position = view_proj * vec4(p, 1.0);
     v_colour = colour;
     v_label = (person + 1.0) / 255.0;
-    v_person = int(person + 0.5);
 }
 """
 
 FRAGMENT_SHADER = """#version 330 core
 in vec3 v_colour;
 flat in float v_label;
-flat in int v_person;
-uniform int bits;                        // 1: alpha = 2**person (silhouette bits), RGB 0
 out vec4 frag;
-void main() {
-    if (bits == 1) frag = vec4(0.0, 0.0, 0.0, float(1 << v_person) / 255.0);
-    else frag = vec4(v_colour, v_label);
-}
+void main() { frag = vec4(v_colour, v_label); }
 """
 
 #: Where a hidden person is moved (far outside every frustum).
@@ -104,7 +96,6 @@ class Rasteriser:
         GL.glDeleteShader(fs)
         self._u_view_proj = GL.glGetUniformLocation(self.program, "view_proj")
         self._u_offsets = GL.glGetUniformLocation(self.program, "offsets")
-        self._u_bits = GL.glGetUniformLocation(self.program, "bits")
 
     def _build_buffers(self, GL, mesh: Mesh) -> None:
         data = np.ascontiguousarray(np.column_stack([mesh.positions, mesh.colours, mesh.person]),
@@ -207,9 +198,6 @@ class Rasteriser:
         GL.glUseProgram(self.program)
         GL.glBindVertexArray(self.vao)
         GL.glDisable(GL.GL_BLEND)
-        GL.glDisable(GL.GL_COLOR_LOGIC_OP)
-        GL.glDepthMask(GL.GL_TRUE)
-        GL.glUniform1i(self._u_bits, 0)
         GL.glDisable(GL.GL_CULL_FACE)
         GL.glDisable(GL.GL_MULTISAMPLE)
         GL.glDisable(GL.GL_DITHER)
@@ -256,7 +244,7 @@ class Rasteriser:
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
 
     def draw_people(self, view_projs: np.ndarray, offsets_xy: np.ndarray, bands, rects,
-                    out: np.ndarray, bits: bool = False) -> None:
+                    out: np.ndarray) -> None:
         """Draw only the people over the stored room, inside ``rects``, and read those back.
 
         view_projs : (n, 4, 4) float, projection @ view per camera
@@ -274,16 +262,7 @@ class Rasteriser:
         :meth:`draw` (the room's, then the people drawn before it), so inside the
         rectangles the pixels are those of the whole-scene draw, bit for bit, provided
         the rectangles hold every pixel the people cover. Requires :meth:`store_room`.
-
-        bits : draw each person's silhouette bit instead (at most 8 people): every person
-            fragment ORs ``2**person`` into alpha (``glLogicOp(GL_OR)``), tested against
-            the room's depth only (no depth writes, so people do not hide each other);
-            RGB keeps the room's colour. A pixel's bit i is then set exactly where person
-            i passes the depth test against the room, i.e. where drawing person i alone
-            gives a label: the same fragments meet the same depth values.
         """
-        if bits and self.n_people > 8:
-            raise ValueError(f"bits: silhouette bits fit 8 people in alpha, got {self.n_people}")
         if self.room_fbo is None:
             raise RuntimeError("draw_people: store_room() first")
         GL = self.GL
@@ -308,11 +287,6 @@ class Rasteriser:
                                      GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
         self._state(GL)
         self._set_offsets(GL, offsets_xy)
-        if bits:
-            GL.glUniform1i(self._u_bits, 1)
-            GL.glEnable(GL.GL_COLOR_LOGIC_OP)
-            GL.glLogicOp(GL.GL_OR)
-            GL.glDepthMask(GL.GL_FALSE)
         vp = np.ascontiguousarray(view_projs, np.float32)
         count = self.n_vertices - self.people_first
         for k in todo:
@@ -330,8 +304,6 @@ class Rasteriser:
                                     out[b, y0, x0:].ctypes.data)
         finally:
             GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, 0)
-            if bits:
-                self._state(GL)
             GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
 
     def close(self) -> None:

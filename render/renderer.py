@@ -156,7 +156,10 @@ class Renderer:
         rng : draws the per-camera gain and the sensor noise; required unless ``clean``
         clean : no gain and no noise (the ideal distorted image)
         """
-        pos = self._positions(positions_xy)
+        count = self.scene.people.count
+        pos = np.asarray(positions_xy, float).reshape(-1, 2) if count else np.zeros((0, 2))
+        if pos.shape != (count, 2):
+            raise ValueError(f"positions_xy: expected shape ({count}, 2), got {np.shape(positions_xy)}")
         if not clean and rng is None:
             raise ValueError("rng: expected an np.random.Generator (or clean=True for noise-free frames)")
         idx = self._indices(cameras)
@@ -187,54 +190,6 @@ class Renderer:
                 for x0, y0, x1, y1 in boxes[k]:
                     work[i, y0:y1, x0:x1] = self._canvas[i, y0:y1, x0:x1]
         return Frames(rgb, labels, tuple(self.numbers[i] for i in idx))
-
-    def silhouettes(self, positions_xy, cameras=None) -> np.ndarray:
-        """Every person's unoccluded silhouette as a bitmask, from one people-only pass.
-
-        positions_xy : (count, 2) float, metres, world frame (NaN rows: hidden); at most 8
-            people
-        cameras : 1-based camera numbers (default: all prepared cameras)
-        Returns (n, H, W) uint8: bit i set where person i covers the pixel when the others
-        are hidden, i.e. ``render(alone_i, clean=True).labels > 0`` (the room still
-        occludes). The people are drawn once over the room's colour and depth with
-        ``Rasteriser.draw_people(bits=True)`` and distorted like the labels (nearest).
-        """
-        pos = self._positions(positions_xy)
-        if len(pos) > 8:
-            raise ValueError(f"positions_xy: silhouette bits fit 8 people in uint8, got {len(pos)}")
-        idx = self._indices(cameras)
-        self._background_frames()
-        H, W = self.height, self.width
-        rects = self._rects(idx, pos)
-        regions = regions_of(self._block_lo[idx], self._block_hi[idx], rects, (H, W))
-        boxes = [_boxes(r, self.canvas_size) for r in rects]
-        out = np.zeros((len(idx), H, W), np.uint8)
-        work, alpha = self._work, self._alpha
-        try:
-            self.raster.draw_people(self.view_projs[idx], pos, idx, boxes, work, bits=True)
-            for k, i in enumerate(idx):
-                if not regions[k]:
-                    continue
-                m = self.maps[self.map_index[i]]
-                for x0, y0, x1, y1 in boxes[k]:
-                    cv2.extractChannel(work[i, y0:y1, x0:x1], 3, dst=alpha[y0:y1, x0:x1])
-                for r0, r1, c0, c1 in regions[k]:
-                    distort_region(alpha, m, (r0, r1, c0, c1), out[k, r0:r1, c0:c1], nearest=True)
-                for x0, y0, x1, y1 in boxes[k]:
-                    alpha[y0:y1, x0:x1] = 0
-        finally:                                    # the work canvases are the room again
-            for k, i in enumerate(idx):
-                for x0, y0, x1, y1 in boxes[k]:
-                    work[i, y0:y1, x0:x1] = self._canvas[i, y0:y1, x0:x1]
-        return out
-
-    def _positions(self, positions_xy) -> np.ndarray:
-        """positions_xy checked: (count, 2) float, one row per person of the scene."""
-        count = self.scene.people.count
-        pos = np.asarray(positions_xy, float).reshape(-1, 2) if count else np.zeros((0, 2))
-        if pos.shape != (count, 2):
-            raise ValueError(f"positions_xy: expected shape ({count}, 2), got {np.shape(positions_xy)}")
-        return pos
 
     def _draw_people(self, idx: np.ndarray, pos: np.ndarray, boxes: list) -> None:
         """Draw the people over the room inside their canvas ``boxes``, into ``self._work``.

@@ -148,25 +148,12 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
     Returns (n_cams, H, W) uint8 (uint16 above 8 people), bit ``i`` set where person ``i``
     covers the pixel when the others are hidden.
 
-    Up to 8 people: one people-only pass that ORs every person's bit over the room's
-    depth (:meth:`render.Renderer.silhouettes`). Above: where person i's canvas box (the
-    renderer's conservative box of every pixel the person covers) meets no other
-    person's box in a camera, nobody can occlude them there, so their silhouette is
-    ``labels == i + 1``; only the cameras where boxes overlap are re-rendered with the
-    others hidden (``clean=True``, labels only). Both are bit-identical to rendering each
-    person alone (tests/test_dataset_render.py).
+    Where person i's canvas box (the renderer's conservative box of every pixel the
+    person covers) meets no other person's box in a camera, nobody can occlude them
+    there, so their silhouette is ``labels == i + 1``; only the cameras where boxes
+    overlap are re-rendered with the others hidden (``clean=True``, labels only). Both are
+    bit-identical to rendering each person alone (tests/test_dataset_outputs.py).
     """
-    pos = np.asarray(positions_xy, float)
-    P, n = len(pos), len(renderer.numbers)
-    dtype = silhouette_dtype(P)
-    if 0 < P <= 8:
-        return renderer.silhouettes(pos)
-    return silhouettes_rerendered(renderer, pos, labels)
-
-
-def silhouettes_rerendered(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """:func:`silhouettes` by re-rendering the people whose boxes overlap (any count up
-    to 16; the path above 8 people)."""
     pos = np.asarray(positions_xy, float)
     P, n = len(pos), len(renderer.numbers)
     dtype = silhouette_dtype(P)

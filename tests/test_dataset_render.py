@@ -106,19 +106,6 @@ def test_silhouettes_exact_when_people_overlap(lab):
     assert any(((sil >> i) & 1).sum() > (fr.labels == i + 1).sum() for i in range(3))   # someone is occluded
 
 
-def test_one_pass_silhouettes_equal_the_rerendered_ones(lab):
-    """The one-pass bit draw (up to 8 people) and the re-rendering path agree bit for bit."""
-    from testbed.episodes import EpisodeConfig, _renderer, load_episode_scene, silhouettes_rerendered
-
-    config = EpisodeConfig("lab", 4, (2, 7, 11, 16), 1, 0)
-    r = _renderer(config, load_episode_scene(config))
-    pos = np.array([[2.0, 2.0], [2.3, 2.9], [2.6, 2.4], [np.nan, np.nan]])
-    fr = r.render(pos, clean=True)
-    fast = r.silhouettes(pos)
-    np.testing.assert_array_equal(fast, silhouettes_rerendered(r, pos, fr.labels))
-    assert {3, 5, 6} <= set(np.unique(fast).tolist())   # every pair overlaps somewhere
-
-
 def test_same_bytes_with_two_workers(dataset, tmp_path):
     out = tmp_path / "two"
     assert main(ARGS + ["--out", str(out), "--workers", "2"]) == 0
