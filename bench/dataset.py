@@ -1,6 +1,6 @@
 """Frames per second of dataset generation (16 cameras, every output) against rendering alone.
 
-    .venv/bin/python bench/dataset.py [--frames 8] [--episodes 2] [--format png|video] [--json]
+    .venv/bin/python bench/dataset.py [--frames 24] [--episodes 3] [--format png|video] [--json]
 
 render_fps : ``Renderer.render`` alone (16 cameras, noise, labels) in one local Dask worker
              process with LP_NUM_THREADS=1, after warm-up
@@ -74,8 +74,10 @@ def generation_fps(client, config, episodes: int, workers: int, root: Path) -> f
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--frames", type=int, default=8, help="frames per episode (default 8)")
-    p.add_argument("--episodes", type=int, default=2, help="episodes per worker (default 2)")
+    # runs of a few seconds move by +-20 % with the cluster's start and the last episode's
+    # tail; 3 x 24 frames per worker take ~10 s on one worker and give stable ratios
+    p.add_argument("--frames", type=int, default=24, help="frames per episode (default 24)")
+    p.add_argument("--episodes", type=int, default=3, help="episodes per worker (default 3)")
     p.add_argument("--format", choices=("png", "video"), default="png", help="frame format (default png)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     args = p.parse_args(argv)

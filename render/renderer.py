@@ -156,12 +156,23 @@ class Renderer:
         rng : draws the per-camera gain and the sensor noise; required unless ``clean``
         clean : no gain and no noise (the ideal distorted image)
         """
+        if not clean and rng is None:
+            raise ValueError("rng: expected an np.random.Generator (or clean=True for noise-free frames)")
+        return self._render(positions_xy, cameras, rng, clean, True)
+
+    def labels(self, positions_xy, cameras=None) -> np.ndarray:
+        """Label images only: ``render(positions_xy, cameras, clean=True).labels``, bit for bit,
+        without the colour work (no RGB remap or copy).
+
+        Returns (n_cams, H, W) uint8, 0 background, person index + 1 elsewhere.
+        """
+        return self._render(positions_xy, cameras, None, True, False).labels
+
+    def _render(self, positions_xy, cameras, rng, clean: bool, colour: bool) -> Frames:
         count = self.scene.people.count
         pos = np.asarray(positions_xy, float).reshape(-1, 2) if count else np.zeros((0, 2))
         if pos.shape != (count, 2):
             raise ValueError(f"positions_xy: expected shape ({count}, 2), got {np.shape(positions_xy)}")
-        if not clean and rng is None:
-            raise ValueError("rng: expected an np.random.Generator (or clean=True for noise-free frames)")
         idx = self._indices(cameras)
         background = self._background_frames()
         n, H, W = len(idx), self.height, self.width
@@ -174,7 +185,7 @@ class Renderer:
                 pool = self._noise_pool()
         rects = self._rects(idx, pos)
         regions = regions_of(self._block_lo[idx], self._block_hi[idx], rects, (H, W))
-        rgb = np.empty((n, H, W, 3), np.uint8)
+        rgb = np.empty((n, H, W, 3) if colour else (n, 0, 0, 3), np.uint8)
         labels = np.zeros((n, H, W), np.uint8)
 
         boxes = [_boxes(r, self.canvas_size) for r in rects]
@@ -183,8 +194,8 @@ class Renderer:
             self._draw_people(idx, pos, boxes)
             for k, i in enumerate(idx):
                 noise = None if pool is None else pool[offsets[k]:offsets[k] + H * W * 3].reshape(H, W * 3)
-                self._finish(int(i), work[i], boxes[k], regions[k], background.rgb[i], rgb[k], labels[k],
-                             None if clean else gains[k], noise)
+                self._finish(int(i), work[i], boxes[k], regions[k], background.rgb[i],
+                             rgb[k] if colour else None, labels[k], None if clean else gains[k], noise)
         finally:                                    # the work canvases are the room again
             for k, i in enumerate(idx):
                 for x0, y0, x1, y1 in boxes[k]:
@@ -204,24 +215,28 @@ class Renderer:
         self.raster.draw_people(self.view_projs[idx], pos, idx, boxes, self._work)
 
     def _finish(self, i: int, canvas: np.ndarray, boxes: list, regions: list, background: np.ndarray,
-                rgb: np.ndarray, labels: np.ndarray, gain: float | None, noise: np.ndarray | None) -> None:
+                rgb: np.ndarray | None, labels: np.ndarray, gain: float | None,
+                noise: np.ndarray | None) -> None:
         """Camera ``i``'s distorted frame and labels from its canvas, into ``rgb`` and ``labels``.
 
         Outside the regions the people can reach the frame is the cached background, bit
         for bit (same draw, same band); inside, the canvas is remapped. Then the gain and
-        the noise (``gain`` None: clean) over the whole frame, in one pass.
+        the noise (``gain`` None: clean) over the whole frame, in one pass. ``rgb`` None:
+        the labels only.
         """
         m = self.maps[self.map_index[i]]
         H, W = self.height, self.width
-        np.copyto(rgb, background)
+        if rgb is not None:
+            np.copyto(rgb, background)
         if regions:
             scratch, alpha = self._rgba, self._alpha
             for x0, y0, x1, y1 in boxes:            # the labels; 0 outside the boxes
                 cv2.extractChannel(canvas[y0:y1, x0:x1], 3, dst=alpha[y0:y1, x0:x1])
             for r0, r1, c0, c1 in regions:
-                rgba = scratch[:r1 - r0, :c1 - c0]
-                distort_region(canvas, m, (r0, r1, c0, c1), rgba)
-                cv2.cvtColor(rgba, cv2.COLOR_RGBA2RGB, dst=rgb[r0:r1, c0:c1])
+                if rgb is not None:
+                    rgba = scratch[:r1 - r0, :c1 - c0]
+                    distort_region(canvas, m, (r0, r1, c0, c1), rgba)
+                    cv2.cvtColor(rgba, cv2.COLOR_RGBA2RGB, dst=rgb[r0:r1, c0:c1])
                 distort_region(alpha, m, (r0, r1, c0, c1), labels[r0:r1, c0:c1], nearest=True)
             for x0, y0, x1, y1 in boxes:
                 alpha[y0:y1, x0:x1] = 0             # outside the boxes the canvas alpha is 0

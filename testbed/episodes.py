@@ -27,6 +27,7 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from testbed.dataset import frame_name, write_calibration, write_png
@@ -150,9 +151,10 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
 
     Where person i's canvas box (the renderer's conservative box of every pixel the
     person covers) meets no other person's box in a camera, nobody can occlude them
-    there, so their silhouette is ``labels == i + 1``; only the cameras where boxes
-    overlap are re-rendered with the others hidden (``clean=True``, labels only). Both are
-    bit-identical to rendering each person alone (tests/test_dataset_outputs.py).
+    there, so their silhouette is ``labels == i + 1`` (one look-up table per camera maps
+    every such label to its bit); only the cameras where boxes overlap are re-rendered
+    with the others hidden (:meth:`render.Renderer.labels`, no colour work). Both are
+    bit-identical to rendering each person alone (tests/test_dataset_render.py).
     """
     pos = np.asarray(positions_xy, float)
     P, n = len(pos), len(renderer.numbers)
@@ -167,16 +169,19 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
                 & (y0[:, :, None] <= y1[:, None, :]) & (y0[:, None, :] <= y1[:, :, None]))  # (n, P, P)
     meet &= ~np.eye(P, dtype=bool)[None]
     overlap = meet.any(axis=2)                                          # (n, P)
+    bits = (1 << np.arange(P)).astype(dtype)
+    lut = np.zeros((n, 256), dtype)                                     # label -> bit, direct people only
+    lut[:, 1:P + 1] = np.where(overlap, 0, bits)
+    for c in np.flatnonzero(lut.any(axis=1)):
+        cv2.LUT(labels[c], lut[c], dst=out[c])
     for i in range(P):
-        bit = dtype(1 << i)
-        direct = ~overlap[:, i]
-        out[direct] |= (labels[direct] == i + 1).astype(dtype) * bit
         cams = np.flatnonzero(overlap[:, i])
         if cams.size:
             alone = np.full_like(pos, np.nan)
             alone[i] = pos[i]
-            f = renderer.render(alone, cameras=[renderer.numbers[c] for c in cams], clean=True)
-            out[cams] |= (f.labels > 0).astype(dtype) * bit
+            seen = renderer.labels(alone, cameras=[renderer.numbers[c] for c in cams])
+            for k, c in enumerate(cams):
+                cv2.bitwise_or(out[c], int(bits[i]), dst=out[c], mask=seen[k])
     return out
 
 

@@ -106,6 +106,24 @@ def test_silhouettes_exact_when_people_overlap(lab):
     assert any(((sil >> i) & 1).sum() > (fr.labels == i + 1).sum() for i in range(3))   # someone is occluded
 
 
+
+def test_silhouettes_exact_with_sixteen_bit_masks():
+    """Ten people (uint16 bitmasks, a look-up table per camera plus re-rendered overlaps)."""
+    from testbed.episode import walk
+    from testbed.episodes import EpisodeConfig, _renderer, load_episode_scene, silhouettes
+
+    config = EpisodeConfig("lab", 10, (2, 7, 11), 1, 0)
+    scene = load_episode_scene(config)
+    r = _renderer(config, scene)
+    pos = walk(scene, 1, np.random.default_rng(5))[0]
+    sil = silhouettes(r, pos, r.labels(pos))
+    assert sil.dtype == np.uint16
+    for i in range(10):
+        alone = np.full_like(pos, np.nan)
+        alone[i] = pos[i]
+        np.testing.assert_array_equal((sil >> i) & 1 == 1, r.labels(alone) > 0)
+    assert sil.any()
+
 def test_same_bytes_with_two_workers(dataset, tmp_path):
     out = tmp_path / "two"
     assert main(ARGS + ["--out", str(out), "--workers", "2"]) == 0

@@ -33,6 +33,16 @@ def test_clean_frames_equal_the_whole_image_reference(lab, lab_renderer, seed):
     assert np.array_equal(f.labels, labels)
 
 
+
+@pytest.mark.parametrize("cameras", [None, [2, 5, 9]])
+def test_labels_only_equal_the_reference(lab, lab_renderer, cameras):
+    """``Renderer.labels`` skips the colour work but gives the clean frames' labels exactly."""
+    positions = np.random.default_rng(11).uniform(0.3, 5.7, (lab.people.count, 2))
+    positions[1] = np.nan
+    labels = lab_renderer.labels(positions, cameras=cameras)
+    assert np.array_equal(labels, _reference(lab_renderer, positions, cameras)[1])
+    assert np.array_equal(labels, lab_renderer.render(positions, cameras=cameras, clean=True).labels)
+
 def _random_positions(lab, rng, margin):
     x0, y0, x1, y1 = lab.room.polygon.bounds
     return np.column_stack([rng.uniform(x0 + margin, x1 - margin, lab.people.count),
