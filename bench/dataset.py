@@ -53,12 +53,22 @@ def render_only(config, frames: int) -> float:
     return frames / (time.perf_counter() - t)
 
 
+def warm_up(config) -> None:
+    """One episode in this worker (renderer, maps, pipeline), written to a scratch folder."""
+    from testbed.episodes import render_episode
+
+    scratch = tempfile.mkdtemp(prefix="bench-warm.")
+    try:
+        render_episode(config, 0, scratch)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
 def generation_fps(client, config, episodes: int, workers: int, root: Path) -> float:
     from testbed.generate import generate
 
-    warm = root / f"warm{workers}"
-    warm.mkdir()
-    generate(config, workers, warm, {}, client)                   # one episode per worker: renderers, maps
+    client.gather([client.submit(warm_up, config, workers=[w], pure=False)   # every worker once
+                   for w in client.scheduler_info()["workers"]])
     out = root / f"timed{workers}"
     out.mkdir()
     t = time.perf_counter()

@@ -15,6 +15,7 @@ arguments give the same manifest whatever the worker count or completion order.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import platform
@@ -166,7 +167,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                 entry = render_episode(config, i, str(out), progress, secs)
                 finished(entry, socket.gethostname(), secs)
         else:
-            from distributed import as_completed
+            from distributed import as_completed, wait
 
             futures = [client.submit(_remote_episode, config, i, str(out), key=f"episode-{i}-{os.getpid()}-{time.time_ns()}",
                                      pure=False, retries=retries) for i in todo]
@@ -187,7 +188,10 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                     for index, frames in frames_in_progress(out, config).items():
                         if index in shown:
                             show(index, min(frames, config.frames - 1))
-                    time.sleep(0.25)
+                    pending = [f for f in futures if not f.done()]
+                    if pending:                     # wake at the next finished episode, or in 0.25 s
+                        with contextlib.suppress(TimeoutError):
+                            wait(pending, timeout=0.25, return_when="FIRST_COMPLETED")
             finally:
                 for f in futures:
                     f.cancel()
