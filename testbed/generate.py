@@ -167,7 +167,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                 entry = render_episode(config, i, str(out), progress, secs)
                 finished(entry, socket.gethostname(), secs)
         else:
-            from distributed import as_completed, wait
+            from distributed import wait
 
             futures = [client.submit(_remote_episode, config, i, str(out), key=f"episode-{i}-{os.getpid()}-{time.time_ns()}",
                                      pure=False, retries=retries) for i in todo]
@@ -179,16 +179,16 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                     shown[index] = frames
 
             try:
-                ac = as_completed(futures)
-                while not ac.is_empty():
-                    for fut in ac.next_batch(block=False):
-                        entry, host, secs = fut.result()
+                pending = list(futures)
+                while pending:
+                    for fut in [f for f in pending if f.done()]:
+                        entry, host, secs = fut.result()     # re-raises the episode's error
                         finished(entry, host, secs)
                         show(entry["index"], entry["frames"])
+                        pending.remove(fut)
                     for index, frames in frames_in_progress(out, config).items():
                         if index in shown:
                             show(index, min(frames, config.frames - 1))
-                    pending = [f for f in futures if not f.done()]
                     if pending:                     # wake at the next finished episode, or in 0.25 s
                         with contextlib.suppress(TimeoutError):
                             wait(pending, timeout=0.25, return_when="FIRST_COMPLETED")

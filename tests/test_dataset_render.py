@@ -106,7 +106,6 @@ def test_silhouettes_exact_when_people_overlap(lab):
     assert any(((sil >> i) & 1).sum() > (fr.labels == i + 1).sum() for i in range(3))   # someone is occluded
 
 
-
 def test_silhouettes_exact_with_sixteen_bit_masks():
     """Ten people (uint16 bitmasks, a look-up table per camera plus re-rendered overlaps)."""
     from testbed.episode import walk
@@ -123,6 +122,7 @@ def test_silhouettes_exact_with_sixteen_bit_masks():
         alone[i] = pos[i]
         np.testing.assert_array_equal((sil >> i) & 1 == 1, r.labels(alone) > 0)
     assert sil.any()
+
 
 def test_same_bytes_with_two_workers(dataset, tmp_path):
     out = tmp_path / "two"

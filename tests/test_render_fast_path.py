@@ -33,7 +33,6 @@ def test_clean_frames_equal_the_whole_image_reference(lab, lab_renderer, seed):
     assert np.array_equal(f.labels, labels)
 
 
-
 @pytest.mark.parametrize("cameras", [None, [2, 5, 9]])
 def test_labels_only_equal_the_reference(lab, lab_renderer, cameras):
     """``Renderer.labels`` skips the colour work but gives the clean frames' labels exactly."""
@@ -42,6 +41,7 @@ def test_labels_only_equal_the_reference(lab, lab_renderer, cameras):
     labels = lab_renderer.labels(positions, cameras=cameras)
     assert np.array_equal(labels, _reference(lab_renderer, positions, cameras)[1])
     assert np.array_equal(labels, lab_renderer.render(positions, cameras=cameras, clean=True).labels)
+
 
 def _random_positions(lab, rng, margin):
     x0, y0, x1, y1 = lab.room.polygon.bounds
