@@ -12,6 +12,9 @@ overhead   : render_fps / fps_1 - 1, the cost of writing and processing on top o
 overhead_same_run : the same from the 1-worker generation's own stage times (total / render
              - 1): immune to load changing between the measurements
 speedup    : fps_2 / fps_1
+fps_inline, fps_overlap : one episode in this process, as ``camtask render`` runs a single
+             episode (llvmpipe's default threads), its frames written and processed inline
+             or on a second thread while the next frame renders; best of 2 alternated runs
 stage_ms_per_frame_1 : where the 1-worker time goes (run_info.json's episode_seconds):
              render, silhouettes, write (PNG or video), pipeline (scanlines + ground
              truth), hull, finish (per-episode setup, people.csv, npz, checksums, rename)
@@ -82,6 +85,22 @@ def generation_fps(client, config, episodes: int, workers: int, root: Path) -> f
     return fps, per_frame_ms
 
 
+def inprocess_fps(config, root: Path, rounds: int = 2) -> tuple[float, float]:
+    """Frames per second of one episode in this process, inline and overlapped (best of ``rounds``)."""
+    from testbed.episodes import render_episode
+
+    best = {False: 0.0, True: 0.0}
+    for r in range(rounds + 1):                   # round 0 warms the renderer and pipeline up
+        for overlap in (False, True):
+            out = root / f"inproc{r}{int(overlap)}"
+            out.mkdir()
+            t = time.perf_counter()
+            render_episode(config, 0, str(out), overlap=overlap)
+            if r:
+                best[overlap] = max(best[overlap], config.frames / (time.perf_counter() - t))
+    return best[False], best[True]
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     # runs of a few seconds move by +-20 % with the cluster's start and the last episode's
@@ -104,12 +123,15 @@ def main(argv=None) -> int:
             fps_1, ms_1 = generation_fps(client, config, args.episodes, 1, root)
         with open_client(2, worker_env=ENV) as client:
             fps_2, _ = generation_fps(client, config, 2 * args.episodes, 2, root)
+        fps_inline, fps_overlap = inprocess_fps(config, root)
     finally:
         shutil.rmtree(root, ignore_errors=True)
     out = {"cameras": 16, "format": args.format, "frames_per_episode": args.frames, "episodes_per_worker": args.episodes,
            "render_fps": round(render_fps, 3), "fps_1": round(fps_1, 3), "fps_2": round(fps_2, 3),
            "overhead": round(render_fps / fps_1 - 1, 3),
            "overhead_same_run": round(ms_1["total"] / ms_1["render"] - 1, 2), "speedup": round(fps_2 / fps_1, 2),
+           "fps_inline": round(fps_inline, 3), "fps_overlap": round(fps_overlap, 3),
+           "overlap_speedup": round(fps_overlap / fps_inline, 2),
            "stage_ms_per_frame_1": ms_1, "cpus": len(os.sched_getaffinity(0)), "load_average": [round(x, 2) for x in os.getloadavg()]}
     if args.json:
         print(json.dumps(out))
@@ -120,6 +142,8 @@ def main(argv=None) -> int:
         print(f"generation,      1 worker : {out['fps_1']:.2f} frames/s  (writing + processing +{out['overhead']:.0%})")
         print("generation stages, 1 worker, ms per frame:", ms_1)
         print(f"generation,      2 workers: {out['fps_2']:.2f} frames/s  ({out['speedup']:.2f}x one worker)")
+        print(f"one episode in-process: {out['fps_inline']:.2f} frames/s inline, {out['fps_overlap']:.2f} "
+              f"overlapped ({out['overlap_speedup']:.2f}x)")
     return 0
 
 

@@ -24,6 +24,7 @@ import shutil
 import tempfile
 import time
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -197,12 +198,14 @@ def hull_record(frame: int, hull) -> dict:
 
 
 def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
-                   seconds: dict | None = None) -> dict:
+                   seconds: dict | None = None, overlap: bool = False) -> dict:
     """Render, process and write episode ``index`` into ``out/episode_NNNN``; return its manifest entry.
 
     progress : optional callable(frames_done_since_last_call) for in-process progress bars
     seconds : optional dict, filled with the wall-clock seconds spent per stage (render,
         silhouettes, write, pipeline, hull, finish) - for run_info.json, never the manifest
+    overlap : write and process frame f on a second thread while frame f + 1 renders (for a
+        process that has a core to spare; the files are the same bytes either way)
     """
     seconds = {} if seconds is None else seconds
     start = time.perf_counter()
@@ -252,38 +255,62 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
             videos = [VideoWriter(tmp / "frames" / f"{c.name}.mkv", renderer.width, renderer.height,
                                   scene.frame_rate) for c in cameras]
         rows, scans, gts, hulls = [], [], [], []
+
+        def consume(f: int, fr, sil) -> None:
+            """Write frame f's images, then run the node pipeline, ground truth and hull (frames in order)."""
+            t2 = time.perf_counter()
+            fname = frame_name(f)
+            for k, c in enumerate(cameras):
+                if videos:
+                    videos[k].write(fr.rgb[k])
+                for sub, img in ((("frames", fr.rgb[k]),) if not videos else ()) + (
+                        ("masks", fr.labels[k]), ("silhouettes", sil[k])):
+                    rel = f"{sub}/{c.name}/{fname}"
+                    digests[rel] = write_png(tmp / rel, img)
+            t3 = time.perf_counter()
+            scans.append(pipe.process(fr.rgb))
+            gt = pipe.ground_truth(fr.labels)[1]
+            gts.append(gt)
+            t4 = time.perf_counter()
+            hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room)))
+            for pid, (x, y) in enumerate(np.asarray(track[f], float)):
+                rows.append((f, pid, repr(float(x)), repr(float(y)), people.radius, people.height))
+            for key, dt in (("write", t3 - t2), ("pipeline", t4 - t3), ("hull", time.perf_counter() - t4)):
+                seconds[key] = seconds.get(key, 0.0) + dt
+
+        loop_start = time.perf_counter()
+        # overlap: a second thread consumes frame f while this one renders frame f + 1; one
+        # frame in flight at most (bounded memory), consumed in order (the pipeline's state)
+        pool = ThreadPoolExecutor(1, thread_name_prefix="episode-consume") if overlap else None
+        pending = None
         try:
             for f in range(config.frames):
                 t0 = time.perf_counter()
                 fr = renderer.render(track[f], rng=sensor_rng)
                 t1 = time.perf_counter()
                 sil = silhouettes(renderer, track[f], fr.labels)
-                t2 = time.perf_counter()
-                fname = frame_name(f)
-                for k, c in enumerate(cameras):
-                    if videos:
-                        videos[k].write(fr.rgb[k])
-                    for sub, img in ((("frames", fr.rgb[k]),) if not videos else ()) + (
-                            ("masks", fr.labels[k]), ("silhouettes", sil[k])):
-                        rel = f"{sub}/{c.name}/{fname}"
-                        digests[rel] = write_png(tmp / rel, img)
-                t3 = time.perf_counter()
-                scans.append(pipe.process(fr.rgb))
-                gt = pipe.ground_truth(fr.labels)[1]
-                gts.append(gt)
-                t4 = time.perf_counter()
-                hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room)))
-                for pid, (x, y) in enumerate(np.asarray(track[f], float)):
-                    rows.append((f, pid, repr(float(x)), repr(float(y)), people.radius, people.height))
-                t5 = time.perf_counter()
-                for key, dt in (("render", t1 - t0), ("silhouettes", t2 - t1), ("write", t3 - t2),
-                                ("pipeline", t4 - t3), ("hull", t5 - t4)):
+                for key, dt in (("render", t1 - t0), ("silhouettes", time.perf_counter() - t1)):
                     seconds[key] = seconds.get(key, 0.0) + dt
+                if pool is None:
+                    consume(f, fr, sil)
+                    done = 1
+                else:
+                    done = int(pending is not None)
+                    if pending is not None:
+                        pending.result()
+                    pending = pool.submit(consume, f, fr, sil)
+                if progress is not None and done:
+                    progress(1)
+            if pending is not None:
+                pending.result()
                 if progress is not None:
                     progress(1)
         finally:
+            if pool is not None:
+                pool.shutdown(wait=True, cancel_futures=True)
             for v in videos:
                 v.close()
+        loop_end = time.perf_counter()
         with open(tmp / "people.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["frame", "person_id", "x", "y", "radius", "height"])
@@ -305,8 +332,9 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
         }
         (tmp / "meta.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
         files = checksums(tmp, digests)
-        seconds["total"] = time.perf_counter() - start
-        seconds["finish"] = seconds["total"] - sum(v for k, v in seconds.items() if k != "total")
+        end = time.perf_counter()
+        seconds["total"] = end - start
+        seconds["finish"] = (loop_start - start) + (end - loop_end)   # set-up and the files after the frames
         final = out / name
         if final.exists():                       # a retried task whose first run got this far
             shutil.rmtree(final)

@@ -27,6 +27,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode
+from testbed.parallel import default_workers
 
 MANIFEST = "manifest.json"
 RUN_INFO = "run_info.json"
@@ -139,9 +140,11 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
              run_info: dict | None = None) -> dict[int, dict]:
     """Render the episodes not in ``keep`` into ``out``; return all finished entries.
 
-    client : a ``distributed.Client`` or None (in this process, one episode after the other)
+    client : a ``distributed.Client`` or None (in this process, one episode after the other,
+        each writing and processing its frames on a second thread when there is a second core)
     progress : called with a number of frames finished (per frame in-process; on Dask
-        from the frames in the workers' temporary folders, polled every 0.25 s)
+        from the frames in the workers' temporary folders, counted at each finished episode
+        and at least every 0.25 s)
     retries : Dask resubmits an episode whose worker died this many times
     The manifest is rewritten after every finished episode; on an error, the episodes
     finished so far stay listed and valid, and the error is re-raised.
@@ -164,7 +167,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
         if client is None:
             for i in todo:
                 secs: dict = {}
-                entry = render_episode(config, i, str(out), progress, secs)
+                entry = render_episode(config, i, str(out), progress, secs, overlap=default_workers() > 1)
                 finished(entry, socket.gethostname(), secs)
         else:
             from distributed import wait

@@ -132,6 +132,38 @@ def test_same_bytes_with_two_workers(dataset, tmp_path):
     assert [k for k in a if a[k] != b[k]] == []
 
 
+
+def test_overlapped_writing_gives_the_same_files(tmp_path):
+    """Frames consumed on a second thread (in-process runs on several cores) or inline: same bytes."""
+    from testbed.episodes import EpisodeConfig, render_episode
+
+    config = EpisodeConfig("lab", None, (2, 7), 3, 9)
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+    a = render_episode(config, 0, str(tmp_path / "a"), overlap=True)
+    b = render_episode(config, 0, str(tmp_path / "b"), overlap=False)
+    assert a == b
+
+
+@pytest.mark.parametrize("overlap", [True, False])
+def test_a_failure_mid_episode_leaves_nothing(tmp_path, monkeypatch, overlap):
+    from testbed import episodes
+
+    calls = {"n": 0}
+    real = episodes.write_png
+
+    def failing(path, image):
+        calls["n"] += 1
+        if calls["n"] == 12:                      # 2 backgrounds, then 6 images a frame: frame 1 of 0-2
+            raise OSError(f"cannot write {path}: No space left on device")
+        return real(path, image)
+
+    monkeypatch.setattr(episodes, "write_png", failing)
+    with pytest.raises(OSError, match="No space left"):
+        episodes.render_episode(episodes.EpisodeConfig("lab", None, (2, 7), 3, 9), 0, str(tmp_path),
+                                overlap=overlap)
+    assert list(tmp_path.iterdir()) == []
+
 def test_resume_redoes_only_unfinished_episodes(dataset, tmp_path):
     out = tmp_path / "killed"
     shutil.copytree(dataset, out)
