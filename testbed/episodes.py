@@ -293,13 +293,11 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
                     seconds[key] = seconds.get(key, 0.0) + dt
                 if pool is None:
                     consume(f, fr, sil)
-                    done = 1
                 else:
-                    done = int(pending is not None)
                     if pending is not None:
-                        pending.result()
+                        pending.result()            # frame f - 1 is done
                     pending = pool.submit(consume, f, fr, sil)
-                if progress is not None and done:
+                if progress is not None and (pool is None or f > 0):
                     progress(1)
             if pending is not None:
                 pending.result()
