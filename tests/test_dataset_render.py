@@ -140,9 +140,11 @@ def test_overlapped_writing_gives_the_same_files(tmp_path):
     config = EpisodeConfig("lab", None, (2, 7), 3, 9)
     for name in ("a", "b"):
         (tmp_path / name).mkdir()
-    a = render_episode(config, 0, str(tmp_path / "a"), overlap=True)
-    b = render_episode(config, 0, str(tmp_path / "b"), overlap=False)
+    counts = {True: [], False: []}
+    a = render_episode(config, 0, str(tmp_path / "a"), counts[True].append, overlap=True)
+    b = render_episode(config, 0, str(tmp_path / "b"), counts[False].append, overlap=False)
     assert a == b
+    assert counts[True] == counts[False] == [1, 1, 1]            # every frame counted once
 
 
 @pytest.mark.parametrize("overlap", [True, False])
