@@ -158,7 +158,9 @@ class Renderer:
         """
         if not clean and rng is None:
             raise ValueError("rng: expected an np.random.Generator (or clean=True for noise-free frames)")
-        return self._render(positions_xy, cameras, rng, clean, True)
+        idx = self._indices(cameras)
+        rgb, labels = self._render(positions_xy, idx, rng, clean, colour=True)
+        return Frames(rgb, labels, tuple(self.numbers[i] for i in idx))
 
     def labels(self, positions_xy, cameras=None) -> np.ndarray:
         """Label images only: ``render(positions_xy, cameras, clean=True).labels``, bit for bit,
@@ -166,14 +168,14 @@ class Renderer:
 
         Returns (n_cams, H, W) uint8, 0 background, person index + 1 elsewhere.
         """
-        return self._render(positions_xy, cameras, None, True, False).labels
+        return self._render(positions_xy, self._indices(cameras), None, True, colour=False)[1]
 
-    def _render(self, positions_xy, cameras, rng, clean: bool, colour: bool) -> Frames:
+    def _render(self, positions_xy, idx: np.ndarray, rng, clean: bool, colour: bool):
+        """(rgb (n, H, W, 3) uint8 or None without ``colour``, labels (n, H, W) uint8) of cameras ``idx``."""
         count = self.scene.people.count
         pos = np.asarray(positions_xy, float).reshape(-1, 2) if count else np.zeros((0, 2))
         if pos.shape != (count, 2):
             raise ValueError(f"positions_xy: expected shape ({count}, 2), got {np.shape(positions_xy)}")
-        idx = self._indices(cameras)
         background = self._background_frames()
         n, H, W = len(idx), self.height, self.width
         s = self.scene.render
@@ -185,7 +187,7 @@ class Renderer:
                 pool = self._noise_pool()
         rects = self._rects(idx, pos)
         regions = regions_of(self._block_lo[idx], self._block_hi[idx], rects, (H, W))
-        rgb = np.empty((n, H, W, 3) if colour else (n, 0, 0, 3), np.uint8)
+        rgb = np.empty((n, H, W, 3), np.uint8) if colour else None
         labels = np.zeros((n, H, W), np.uint8)
 
         boxes = [_boxes(r, self.canvas_size) for r in rects]
@@ -195,12 +197,12 @@ class Renderer:
             for k, i in enumerate(idx):
                 noise = None if pool is None else pool[offsets[k]:offsets[k] + H * W * 3].reshape(H, W * 3)
                 self._finish(int(i), work[i], boxes[k], regions[k], background.rgb[i],
-                             rgb[k] if colour else None, labels[k], None if clean else gains[k], noise)
+                             None if rgb is None else rgb[k], labels[k], None if clean else gains[k], noise)
         finally:                                    # the work canvases are the room again
             for k, i in enumerate(idx):
                 for x0, y0, x1, y1 in boxes[k]:
                     work[i, y0:y1, x0:x1] = self._canvas[i, y0:y1, x0:x1]
-        return Frames(rgb, labels, tuple(self.numbers[i] for i in idx))
+        return rgb, labels
 
     def _draw_people(self, idx: np.ndarray, pos: np.ndarray, boxes: list) -> None:
         """Draw the people over the room inside their canvas ``boxes``, into ``self._work``.

@@ -165,9 +165,10 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
 
     try:
         if client is None:
+            overlap = default_workers() > 1         # a second core writes while this one renders
             for i in todo:
                 secs: dict = {}
-                entry = render_episode(config, i, str(out), progress, secs, overlap=default_workers() > 1)
+                entry = render_episode(config, i, str(out), progress, secs, overlap=overlap)
                 finished(entry, socket.gethostname(), secs)
         else:
             from distributed import wait

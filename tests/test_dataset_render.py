@@ -132,7 +132,6 @@ def test_same_bytes_with_two_workers(dataset, tmp_path):
     assert [k for k in a if a[k] != b[k]] == []
 
 
-
 def test_overlapped_writing_gives_the_same_files(tmp_path):
     """Frames consumed on a second thread (in-process runs on several cores) or inline: same bytes."""
     from testbed.episodes import EpisodeConfig, render_episode
@@ -165,6 +164,7 @@ def test_a_failure_mid_episode_leaves_nothing(tmp_path, monkeypatch, overlap):
         episodes.render_episode(episodes.EpisodeConfig("lab", None, (2, 7), 3, 9), 0, str(tmp_path),
                                 overlap=overlap)
     assert list(tmp_path.iterdir()) == []
+
 
 def test_resume_redoes_only_unfinished_episodes(dataset, tmp_path):
     out = tmp_path / "killed"
