@@ -268,8 +268,8 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
                     rel = f"{sub}/{c.name}/{fname}"
                     digests[rel] = write_png(tmp / rel, img)
             t3 = time.perf_counter()
-            scans.append(pipe.process(fr.rgb))
-            gt = pipe.ground_truth(fr.labels)[1]
+            scan, gt = pipe.process_with_truth(fr.rgb, fr.labels)
+            scans.append(scan)
             gts.append(gt)
             t4 = time.perf_counter()
             hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room)))

@@ -238,3 +238,24 @@ def test_temporal_state_and_reset():
     pipe.process(fr)
     pipe.reset()
     assert not pipe.process(bg)[0].any()
+
+
+@pytest.mark.parametrize("opening", [1, 5])
+def test_process_with_truth_equals_process_and_ground_truth(opening):
+    cams = LAB[:3]
+    rng = np.random.default_rng(5)
+    bg, frames, labels = synthetic_sequence(cams, 4, rng)
+    labels = np.asarray(labels).copy()
+    labels[1, :, :, :7] = 2                        # truth on the image borders and in every row
+    labels[2, :, -3:] = 1
+    labels[3] = rng.integers(0, 2, labels[3].shape)  # noise: isolated true pixels
+    params = PipelineParams(opening_kernel=opening, temporal_alpha=0.6)
+    model = background_model(bg)
+    both, apart = Pipeline(cams, params, model), Pipeline(cams, params, model)
+    for f, lab in zip(frames, labels):
+        scan, gt = both.process_with_truth(f, lab)
+        np.testing.assert_array_equal(scan, apart.process(f))       # temporal state included
+        np.testing.assert_array_equal(gt, apart.ground_truth(lab)[1])
+        assert scan.dtype == gt.dtype == bool and gt.shape == (3, 640)
+    with pytest.raises(ValueError, match="labels: expected shape"):
+        both.process_with_truth(frames[0], labels[0][:2])
