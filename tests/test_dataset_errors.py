@@ -53,3 +53,18 @@ def test_unreachable_scheduler(tmp_path, capsys):
     code, line = run(capsys, "lab", "--out", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:9")
     assert code == 2 and "cannot reach a Dask scheduler" in line
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_full_disk_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    import collections
+
+    from testbed import generate
+
+    usage = collections.namedtuple("usage", "total used free")
+    seen = []
+    monkeypatch.setattr(generate.shutil, "disk_usage", lambda path: seen.append(path) or usage(10**12, 0, 50 * 10**6))
+    out = tmp_path / "new" / "ds"
+    code, line = run(capsys, "lab", "--out", str(out), "--frames", "100", "--workers", "0")
+    # 101 x 16 frames of 640 x 480 x 3 bytes at DISK_FRACTION 0.6
+    assert code == 2 and line == f"camtask render: error: --out: 50 MB free on {tmp_path}; one episode needs about 894 MB"
+    assert seen == [tmp_path] and not (tmp_path / "new").exists()

@@ -207,3 +207,28 @@ def test_video_format_is_lossless(dataset, tmp_path):
     again = tmp_path / "video2"
     assert main(ARGS + ["--out", str(again), "--workers", "0", "--format", "video", "--episodes", "1"]) == 0
     assert files_of(out) == files_of(again)
+
+
+def test_disk_estimate_covers_an_episode(dataset, lab):
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import estimate_bytes
+
+    used = sum(p.stat().st_size for p in (dataset / "episode_0000").rglob("*") if p.is_file())
+    estimate = estimate_bytes(EpisodeConfig("lab", None, (2, 7, 11), 2, 4), lab, 1)
+    assert used <= estimate <= 1.5 * used
+
+
+def test_too_little_disk_for_the_run_warns_and_renders(tmp_path, capsys, monkeypatch):
+    import collections
+
+    from testbed import generate
+
+    one = 2 * 1 * 640 * 480 * 3 * generate.DISK_FRACTION        # one episode: a frame and the background
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(generate.shutil, "disk_usage", lambda path: usage(10**12, 0, int(1.5 * one)))
+    out = tmp_path / "ds"
+    argv = ["render", "lab", "--episodes", "2", "--frames", "1", "--cameras", "3", "--workers", "0", "--out", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "warning: --out: 1.66 MB free on" in err and "2 episodes need about 2.21 MB" in err
+    assert len(json.loads((out / "manifest.json").read_text())["episodes"]) == 2

@@ -83,11 +83,23 @@ def build_config(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from testbed.generate import check_out, generate, prepare_output
+    from testbed.episodes import load_episode_scene
+    from testbed.generate import (
+        check_out,
+        check_space,
+        estimate_bytes,
+        free_bytes,
+        generate,
+        prepare_output,
+        size_text,
+    )
     from testbed.parallel import default_workers, open_client
 
     config = build_config(args)
     out = Path(args.out)
+    scene = load_episode_scene(config)
+    if not args.overwrite:                            # --overwrite frees the old episodes first
+        check_space(out, estimate_bytes(config, scene, 1), "one episode")
     check_out(out, args.resume, args.overwrite)       # refuse before starting a cluster
     workers = args.workers
     if workers is None and args.scheduler is None:
@@ -100,6 +112,12 @@ def run(args: argparse.Namespace) -> int:
         if todo == 0:
             print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
             return 0
+        check_space(out, estimate_bytes(config, scene, 1), "one episode")
+        need, (free, where) = estimate_bytes(config, scene, todo), free_bytes(out)
+        if free < need:
+            print(f"warning: --out: {size_text(free)} free on {where}; {todo} episodes need about "
+                  f"{size_text(need)}: the run stops when the disk is full (the finished episodes stay "
+                  "valid; --resume finishes it)", file=sys.stderr)
         with tqdm(total=todo * args.frames, desc="render", unit="frame", file=sys.stderr,
                   dynamic_ncols=True) as bar:
             info = {"workers": workers, "scheduler": args.scheduler,
