@@ -4,7 +4,7 @@ Three ways to run, chosen by the command line and passed down here:
 
 - ``workers=0``: in this process, one task after the other (tests, debugging);
 - ``workers=W`` (default: the number of cores): a private ``LocalCluster`` of ``W``
-  processes with one thread each;
+  processes with one thread each, OpenCV's included (``OPENCV_FOR_THREADS_NUM=1``);
 - ``scheduler="tcp://host:port"``: an existing Dask cluster. An unreachable address is
   a one-line ``ValueError`` raised by :func:`open_client` before any work starts.
 
@@ -28,6 +28,14 @@ from typing import Any
 from tqdm import tqdm
 
 __all__ = ["chunk", "default_workers", "open_client", "run_tasks"]
+
+
+#: Environment of every local worker process. OpenCV's pthreads pool ignores
+#: OMP_NUM_THREADS (which Dask sets to 1) and starts a thread per core in every worker:
+#: with as many workers as cores, its parallel loops then wait for threads that another
+#: worker has descheduled. Two dataset workers on 2 cores gave 1.57-1.66x one worker with
+#: it, 1.74-1.79x without (docs/performance.md, "Dataset").
+WORKER_ENV = {"OPENCV_FOR_THREADS_NUM": "1"}
 
 
 def default_workers() -> int:
@@ -57,7 +65,8 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
     scheduler : address of an existing scheduler, e.g. ``"tcp://10.0.0.5:8786"``
     connect_timeout : seconds to wait for ``scheduler`` before giving up
     worker_env : environment variables of the local cluster's worker processes, e.g.
-        ``{"LP_NUM_THREADS": "1"}`` (an existing cluster keeps its own)
+        ``{"LP_NUM_THREADS": "1"}``, on top of :data:`WORKER_ENV` (an existing cluster
+        keeps its own)
     """
     if scheduler is None and workers is not None and int(workers) < 0:
         raise ValueError(f"workers: expected an integer >= 0, got {workers}")
@@ -91,7 +100,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
         warnings.simplefilter("ignore", UserWarning)  # "port 8787 in use" when several clusters run
         cluster = LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-            silence_logs=logging.CRITICAL, **({"env": dict(worker_env)} if worker_env else {}),
+            silence_logs=logging.CRITICAL, env=WORKER_ENV | dict(worker_env or {}),
         )
     client = Client(cluster)
     try:

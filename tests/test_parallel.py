@@ -6,11 +6,19 @@ from testbed.parallel import open_client
 
 
 def _env():
-    return {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "OMP_NUM_THREADS", "LP_NUM_THREADS")}
+    return {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "OMP_NUM_THREADS", "LP_NUM_THREADS",
+                                        "OPENCV_FOR_THREADS_NUM")} | {"cv2_threads": _cv2_threads()}
 
 
-def test_workers_keep_glibc_malloc_defaults():
+def _cv2_threads():
+    import cv2
+
+    return cv2.getNumThreads()
+
+
+def test_workers_keep_glibc_malloc_defaults_and_one_opencv_thread():
     # Dask's nanny would set MALLOC_TRIM_THRESHOLD_, which makes numpy temporaries slow
     with open_client(1, worker_env={"LP_NUM_THREADS": "1"}) as client:
         envs = list(client.run(_env).values())
-    assert envs == [{"MALLOC_TRIM_THRESHOLD_": None, "OMP_NUM_THREADS": "1", "LP_NUM_THREADS": "1"}]
+    assert envs == [{"MALLOC_TRIM_THRESHOLD_": None, "OMP_NUM_THREADS": "1", "LP_NUM_THREADS": "1",
+                     "OPENCV_FOR_THREADS_NUM": "1", "cv2_threads": 1}]     # one OpenCV thread too
