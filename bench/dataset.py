@@ -1,6 +1,6 @@
 """Frames per second of dataset generation (16 cameras, every output) against rendering alone.
 
-    .venv/bin/python bench/dataset.py [--frames 24] [--episodes 3] [--repeat 2] [--format png|video] [--json]
+    .venv/bin/python bench/dataset.py [--frames 24] [--episodes 6] [--repeat 2] [--format png|video] [--json]
 
 render_fps : ``Renderer.render`` alone (16 cameras, noise, labels) in one local Dask worker
              process with LP_NUM_THREADS=1 (and one OpenCV thread, as every local worker:
@@ -107,10 +107,11 @@ def inprocess_fps(config, root: Path, rounds: int = 2) -> tuple[float, float]:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    # runs of a few seconds move by +-20 % with the cluster's start and the last episode's
-    # tail; 3 x 24 frames per worker take ~10 s on one worker and give stable ratios
+    # runs of a few seconds move by +-20 % with the cluster's start; and with 2 workers the
+    # run ends with one worker idle while the other finishes its last episode: 6 x 24
+    # frames per worker (~14 s) gave 1.75-1.80x where 3 x 24 gave 1.67-1.81x per round
     p.add_argument("--frames", type=int, default=24, help="frames per episode (default 24)")
-    p.add_argument("--episodes", type=int, default=3, help="episodes per worker (default 3)")
+    p.add_argument("--episodes", type=int, default=6, help="episodes per worker (default 6)")
     p.add_argument("--repeat", type=int, default=2, help="rounds of 1 then 2 workers, best kept (default 2)")
     p.add_argument("--format", choices=("png", "video"), default="png", help="frame format (default png)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
