@@ -227,7 +227,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                         finished(entry, host, secs)
                         show(entry["index"], entry["frames"])
                         pending.remove(fut)
-                    for index, frames in frames_in_progress(out, config).items():
+                    for index, frames in (frames_in_progress(out, config) if progress else {}).items():
                         if index in shown:
                             show(index, min(frames, config.frames - 1))
                     if pending:                     # wake at the next finished episode, or in 0.25 s
