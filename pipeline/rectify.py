@@ -146,13 +146,10 @@ class Rectifier:
                    ro(np.stack(my)), fixed)
 
     def remap_stacked(self, stacked: np.ndarray) -> np.ndarray:
-        """Remap stacked masks (n_cams * row_stride, W[, C]) uint8 -> (n_cams, out_height, width[, C]) uint8.
-
-        C channels (up to 4) are remapped together, with one read of the maps.
-        """
+        """Remap stacked masks (n_cams * row_stride, W) uint8 -> (n_cams, out_height, width) uint8."""
         out = cv2.remap(stacked, self.fixed_map, None, cv2.INTER_NEAREST,
                         borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-        return out.reshape((-1, self.out_height, self.width) + out.shape[2:])
+        return out.reshape(-1, self.out_height, self.width)
 
     def rectify(self, masks) -> np.ndarray:
         """Rectify masks (n_cams, H, W) bool/uint8 -> (n_cams, out_height, width) bool."""

@@ -33,8 +33,8 @@ __all__ = ["chunk", "default_workers", "open_client", "run_tasks"]
 #: Environment of every local worker process. OpenCV's pthreads pool ignores
 #: OMP_NUM_THREADS (which Dask sets to 1) and starts a thread per core in every worker:
 #: with as many workers as cores, its parallel loops then wait for threads that another
-#: worker has descheduled. Two dataset workers on 2 cores gave 1.57-1.66x one worker with
-#: it, 1.74-1.79x without (docs/performance.md, "Dataset").
+#: worker has descheduled. Two dataset workers on 2 cores ran 1.56-1.71x faster than one
+#: with OpenCV's default threads, 1.62-1.92x with one thread each (docs/performance.md).
 WORKER_ENV = {"OPENCV_FOR_THREADS_NUM": "1"}
 
 

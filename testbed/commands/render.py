@@ -98,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     config = build_config(args)
     out = Path(args.out)
     scene = load_episode_scene(config)
-    if not args.overwrite:                            # --overwrite frees the old episodes first
+    if not (args.overwrite or args.resume):          # those free or keep episodes: checked below
         check_space(out, estimate_bytes(config, scene, 1), "one episode")
     check_out(out, args.resume, args.overwrite)       # refuse before starting a cluster
     workers = args.workers
