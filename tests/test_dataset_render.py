@@ -250,3 +250,19 @@ def test_saved_scanlines_come_from_the_saved_frames_and_masks(dataset):
         np.testing.assert_array_equal(pipe.ground_truth(r.labels(f))[1], saved_gt[f])
     np.testing.assert_allclose(pipe.bearings, bearings, rtol=0, atol=1e-12)   # calibration YAML round trip
     assert saved_gt.any()
+
+
+def test_resuming_a_finished_run_needs_no_disk_space(dataset, tmp_path, capsys, monkeypatch):
+    import collections
+
+    from testbed import generate
+
+    out = tmp_path / "done"
+    shutil.copytree(dataset, out)
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(generate.shutil, "disk_usage", lambda path: usage(10**12, 10**12, 0))
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 0
+    assert "all 2 episodes already finished" in capsys.readouterr().err
+    (out / "manifest.json").unlink()                 # now both episodes are to be redone: refused
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 2
+    assert "--out: 0 MB free on" in capsys.readouterr().err
