@@ -141,6 +141,10 @@ def silhouette_dtype(people: int):
     return np.uint8 if people <= 8 else np.uint16
 
 
+#: Gap between two people's discs (metres) beyond which the nearer one's label is exact.
+APART = 0.02
+
+
 def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.ndarray:
     """Unoccluded silhouette of every person as a bitmask, exactly as if rendered alone.
 
@@ -150,12 +154,17 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
     Returns (n_cams, H, W) uint8 (uint16 above 8 people), bit ``i`` set where person ``i``
     covers the pixel when the others are hidden.
 
-    Where person i's canvas box (the renderer's conservative box of every pixel the
-    person covers) meets no other person's box in a camera, nobody can occlude them
-    there, so their silhouette is ``labels == i + 1`` (one look-up table per camera maps
-    every such label to its bit); only the cameras where boxes overlap are re-rendered
-    with the others hidden (:meth:`render.Renderer.labels`, no colour work). Both are
-    bit-identical to rendering each person alone (tests/test_dataset_render.py).
+    Person i's silhouette in a camera is ``labels == i + 1`` when nobody can occlude
+    them there: when every person whose canvas box (the renderer's conservative box of
+    every pixel a person covers) meets i's stands behind i. Person j is behind i when
+    their discs are more than ``2 radius + APART`` apart and the camera is no farther
+    from i's centre than from j's: the people are translated copies of one convex prism
+    inside their discs, so the vertical bisector plane separates them, every ray from
+    the camera meets i before j, and with APART the depths along a ray differ by far more
+    than the 24-bit depth buffer resolves. One look-up table per camera maps every such
+    label to its bit; the other people are re-rendered with the others hidden
+    (:meth:`render.Renderer.labels`, no colour work). Both are bit-identical to rendering
+    each person alone (tests/test_dataset_render.py).
     """
     pos = np.asarray(positions_xy, float)
     P, n = len(pos), len(renderer.numbers)
@@ -169,7 +178,11 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
         meet = ((x0[:, :, None] <= x1[:, None, :]) & (x0[:, None, :] <= x1[:, :, None])
                 & (y0[:, :, None] <= y1[:, None, :]) & (y0[:, None, :] <= y1[:, :, None]))  # (n, P, P)
     meet &= ~np.eye(P, dtype=bool)[None]
-    overlap = meet.any(axis=2)                                          # (n, P)
+    centres = np.stack([c.center_world[:2] for c in renderer.cameras])  # (n, 2) metres
+    to_cam = np.linalg.norm(centres[:, None, :] - pos[None], axis=2)    # (n, P)
+    apart = np.linalg.norm(pos[:, None] - pos[None], axis=2) > 2 * renderer.scene.people.radius + APART
+    behind = apart[None] & (to_cam[:, :, None] <= to_cam[:, None, :])  # (n, P, P): j behind i
+    overlap = (meet & ~behind).any(axis=2)                              # (n, P): i may be occluded
     bits = (1 << np.arange(P)).astype(dtype)
     lut = np.zeros((n, 256), dtype)                                     # label -> bit, direct people only
     lut[:, 1:P + 1] = np.where(overlap, 0, bits)

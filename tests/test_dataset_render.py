@@ -106,6 +106,27 @@ def test_silhouettes_exact_when_people_overlap(lab):
     assert any(((sil >> i) & 1).sum() > (fr.labels == i + 1).sum() for i in range(3))   # someone is occluded
 
 
+@pytest.mark.parametrize("gap", [0.0, 0.005, 0.0199, 0.0201, 0.05, 0.5])
+def test_silhouettes_exact_for_people_close_together(lab, gap):
+    """Two people ``gap`` metres apart (disc to disc), in every camera: where the nearer
+    one is taken from the labels (gap > APART) and where both are re-rendered."""
+    from testbed.episodes import EpisodeConfig, _renderer, load_episode_scene, silhouettes
+
+    config = EpisodeConfig("lab", None, None, 1, 0)
+    scene = load_episode_scene(config)
+    r = _renderer(config, scene)
+    d = 2 * scene.people.radius + gap
+    pos = np.array([[3.0, 2.5], [3.0 + d * np.cos(0.7), 2.5 + d * np.sin(0.7)], [np.nan, np.nan]])
+    labels = r.labels(pos)
+    sil = silhouettes(r, pos, labels)
+    for i in range(2):
+        alone = np.full_like(pos, np.nan)
+        alone[i] = pos[i]
+        np.testing.assert_array_equal((sil >> i) & 1 == 1, r.labels(alone) > 0)
+    assert not (sil >> 2).any()
+    assert any(((sil >> i) & 1).sum() > (labels == i + 1).sum() for i in range(2))   # someone is occluded
+
+
 def test_silhouettes_exact_with_sixteen_bit_masks():
     """Ten people (uint16 bitmasks, a look-up table per camera plus re-rendered overlaps)."""
     from testbed.episode import walk
