@@ -122,9 +122,9 @@ def main(argv=None) -> int:
     from testbed.parallel import open_client
 
     config = EpisodeConfig("lab", None, None, args.frames, 0, args.format, load_params().to_dict())
-    root = Path(tempfile.mkdtemp(prefix="bench-dataset."))
     if args.repeat < 1:
         p.error(f"--repeat: expected an integer >= 1, got {args.repeat}")
+    root = Path(tempfile.mkdtemp(prefix="bench-dataset."))
     runs: dict[str, list] = {"render": [], "1": [], "2": []}
     try:
         for r in range(args.repeat):

@@ -112,7 +112,8 @@ def run(args: argparse.Namespace) -> int:
         if todo == 0:
             print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
             return 0
-        check_space(out, estimate_bytes(config, scene, 1), "one episode")
+        if args.overwrite or args.resume:
+            check_space(out, estimate_bytes(config, scene, 1), "one episode")
         need, (free, where) = estimate_bytes(config, scene, todo), free_bytes(out)
         if free < need:
             print(f"warning: --out: {size_text(free)} free on {where}; {todo} episodes need about "
