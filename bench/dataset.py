@@ -3,7 +3,7 @@
     .venv/bin/python bench/dataset.py [--frames 24] [--episodes 6] [--repeat 2] [--format png|video] [--json]
 
 render_fps : ``Renderer.render`` alone (16 cameras, noise, labels) in one local Dask worker
-             process with LP_NUM_THREADS=1 (and one OpenCV thread, as every local worker:
+             process with LP_NUM_THREADS=1 and one OpenCV thread (as every local worker:
              testbed.parallel.WORKER_ENV), after warm-up
 fps_1      : ``camtask render``'s generation (render + silhouettes + pipeline + ground truth
              + hull + PNG writing + checksums + manifest) on 1 local worker, LP_NUM_THREADS=1,
@@ -37,9 +37,6 @@ import time
 from pathlib import Path
 
 sys.path[0] = str(Path(__file__).resolve().parent.parent)
-
-ENV = {"LP_NUM_THREADS": "1"}
-
 
 def render_only(config, frames: int) -> float:
     """Frames per second of rendering alone, in a worker (renderer from the episode cache)."""
@@ -128,10 +125,10 @@ def main(argv=None) -> int:
     runs: dict[str, list] = {"render": [], "1": [], "2": []}
     try:
         for r in range(args.repeat):
-            with open_client(1, worker_env=ENV) as client:
+            with open_client(1) as client:
                 runs["render"].append(client.submit(render_only, config, 2 * args.frames, pure=False).result())
                 runs["1"].append(generation_fps(client, config, args.episodes, 1, root / f"r{r}"))
-            with open_client(2, worker_env=ENV) as client:
+            with open_client(2) as client:
                 runs["2"].append(generation_fps(client, config, 2 * args.episodes, 2, root / f"r{r}"))
         fps_inline, fps_overlap = inprocess_fps(config, root)
     finally:

@@ -151,9 +151,8 @@ class Pipeline:
         cv2.bitwise_or(opened, self._truth.reshape(-1, w), dst=opened)
         rect = self.rectifier.remap_stacked(opened)                 # (n, Ho, W): 0, 1, 128, 129
         fg = cv2.threshold(rect.reshape(-1, w), 127, 1, cv2.THRESH_BINARY)[1].reshape(rect.shape)
-        column_sum = lambda a: np.stack([cv2.reduce(x, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S)[0] for x in a])
-        counts = column_sum(fg)                                     # (n, W) int32, F
-        return self._scanlines(counts.astype(np.float64)), column_sum(rect) > 128 * counts
+        counts = _column_sums(fg)                                   # F
+        return self._scanlines(counts.astype(np.float64)), _column_sums(rect) > 128 * counts
 
     def _scanlines(self, sums: np.ndarray) -> np.ndarray:
         """Column counts (n_cams, W) float64 -> scanlines (n_cams, W) bool; updates the temporal state."""
@@ -188,7 +187,11 @@ class Pipeline:
         return lab
 
 
+def _column_sums(rect: np.ndarray) -> np.ndarray:
+    """Column sums of rectified uint8 images (n_cams, Ho, W) -> (n_cams, W) int32."""
+    return np.stack([cv2.reduce(r, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S)[0] for r in rect])
+
+
 def _counts(rect: np.ndarray) -> np.ndarray:
     """Column sums of rectified 0/255 masks (n_cams, Ho, W) -> (n_cams, W) float64 pixel counts."""
-    sums = np.stack([cv2.reduce(r, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S)[0] for r in rect])
-    return sums.astype(np.float64) / 255.0
+    return _column_sums(rect).astype(np.float64) / 255.0

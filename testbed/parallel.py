@@ -4,7 +4,7 @@ Three ways to run, chosen by the command line and passed down here:
 
 - ``workers=0``: in this process, one task after the other (tests, debugging);
 - ``workers=W`` (default: the number of cores): a private ``LocalCluster`` of ``W``
-  processes with one thread each, OpenCV's included (``OPENCV_FOR_THREADS_NUM=1``);
+  processes with one thread each, llvmpipe's and OpenCV's included (:data:`WORKER_ENV`);
 - ``scheduler="tcp://host:port"``: an existing Dask cluster. An unreachable address is
   a one-line ``ValueError`` raised by :func:`open_client` before any work starts.
 
@@ -30,12 +30,13 @@ from tqdm import tqdm
 __all__ = ["chunk", "default_workers", "open_client", "run_tasks"]
 
 
-#: Environment of every local worker process. OpenCV's pthreads pool ignores
-#: OMP_NUM_THREADS (which Dask sets to 1) and starts a thread per core in every worker:
-#: with as many workers as cores, its parallel loops then wait for threads that another
-#: worker has descheduled. Two dataset workers on 2 cores ran 1.56-1.71x faster than one
-#: with OpenCV's default threads, 1.62-1.92x with one thread each (docs/performance.md).
-WORKER_ENV = {"OPENCV_FOR_THREADS_NUM": "1"}
+#: Environment of every local worker process: one thread each for Mesa's llvmpipe
+#: (renderers in workers) and OpenCV. Both ignore OMP_NUM_THREADS (which Dask sets to 1)
+#: and start a thread per core in every worker: with as many workers as cores, their
+#: parallel loops then wait for threads that another worker has descheduled. Two dataset
+#: workers on 2 cores ran 1.56-1.71x faster than one with OpenCV's default threads,
+#: 1.62-1.92x with one thread each (docs/performance.md).
+WORKER_ENV = {"LP_NUM_THREADS": "1", "OPENCV_FOR_THREADS_NUM": "1"}
 
 
 def default_workers() -> int:
@@ -58,15 +59,13 @@ def chunk(n: int, size: int) -> list[tuple[int, int]]:
 
 @contextlib.contextmanager
 def open_client(workers: int | None = None, scheduler: str | None = None,
-                connect_timeout: float = 5.0, worker_env: dict[str, str] | None = None) -> Iterator[Any]:
+                connect_timeout: float = 5.0) -> Iterator[Any]:
     """Yield a ``distributed.Client`` (or ``None`` for ``workers=0``), closed afterwards.
 
     workers : int >= 0 or None (the number of cores); ignored when ``scheduler`` is given
     scheduler : address of an existing scheduler, e.g. ``"tcp://10.0.0.5:8786"``
     connect_timeout : seconds to wait for ``scheduler`` before giving up
-    worker_env : environment variables of the local cluster's worker processes, e.g.
-        ``{"LP_NUM_THREADS": "1"}``, on top of :data:`WORKER_ENV` (an existing cluster
-        keeps its own)
+    Local workers get :data:`WORKER_ENV`; an existing cluster keeps its own environment.
     """
     if scheduler is None and workers is not None and int(workers) < 0:
         raise ValueError(f"workers: expected an integer >= 0, got {workers}")
@@ -100,7 +99,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
         warnings.simplefilter("ignore", UserWarning)  # "port 8787 in use" when several clusters run
         cluster = LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-            silence_logs=logging.CRITICAL, env=WORKER_ENV | dict(worker_env or {}),
+            silence_logs=logging.CRITICAL, env=dict(WORKER_ENV),
         )
     client = Client(cluster)
     try:

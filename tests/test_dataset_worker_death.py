@@ -21,7 +21,7 @@ def test_killed_worker_episode_is_redone(tmp_path):
     out = tmp_path / "data"
     keep = prepare_output(out, config, 1, False, False)
     killed = []
-    with open_client(1, worker_env={"LP_NUM_THREADS": "1"}) as client:
+    with open_client(1) as client:
         (pid,) = client.run(os.getpid).values()
 
         def kill_when_writing():

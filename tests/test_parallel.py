@@ -18,7 +18,7 @@ def _cv2_threads():
 
 def test_workers_keep_glibc_malloc_defaults_and_one_opencv_thread():
     # Dask's nanny would set MALLOC_TRIM_THRESHOLD_, which makes numpy temporaries slow
-    with open_client(1, worker_env={"LP_NUM_THREADS": "1"}) as client:
+    with open_client(1) as client:
         envs = list(client.run(_env).values())
     assert envs == [{"MALLOC_TRIM_THRESHOLD_": None, "OMP_NUM_THREADS": "1", "LP_NUM_THREADS": "1",
                      "OPENCV_FOR_THREADS_NUM": "1", "cv2_threads": 1}]     # one OpenCV thread too

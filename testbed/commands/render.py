@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
         # one process per core, never more than there are episodes; one episode runs here
         workers = min(default_workers(), args.episodes)
         workers = 0 if workers == 1 else workers
-    with open_client(workers, args.scheduler, worker_env={"LP_NUM_THREADS": "1"}) as client:
+    with open_client(workers, args.scheduler) as client:
         keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
         todo = args.episodes - len(keep)
         if todo == 0:
