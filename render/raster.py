@@ -7,7 +7,8 @@ down so that ``glReadPixels`` returns rows top first, and one ``glReadPixels`` r
 all cameras at once into a preallocated ``(n_cams, H, W, 4)`` array: RGB is the baked
 vertex colour, interpolated across the triangle; alpha is the exact label (person
 index + 1, 0 for the room), written from a ``flat`` varying. No lighting, no MSAA, no
-blending, no face culling.
+blending. The people's back faces are culled (:meth:`Rasteriser._draw_people_triangles`);
+the room's faces are all drawn.
 
 :meth:`Rasteriser.draw` draws everything (the room, the benchmark floor, the tests'
 reference). The renderer's steps use :meth:`Rasteriser.draw_people`: a copy of the
@@ -65,6 +66,9 @@ class Rasteriser:
     mesh : the room and the people (:class:`render.geometry.Mesh`)
     n_people : how many people the mesh holds (size of the offsets uniform)
     """
+
+    #: Cull the people's back faces (see :meth:`_draw_people_triangles`).
+    cull_back_faces = True
 
     def __init__(self, mesh: Mesh, n_people: int, width: int, height: int, n_tiles: int,
                  backend: str = "egl"):
@@ -174,7 +178,8 @@ class Rasteriser:
         for i in range(n):
             GL.glViewport(0, int(bands[i]) * self.height, self.width, self.height)
             GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, vp[i])
-            GL.glDrawArrays(GL.GL_TRIANGLES, 0, self.n_vertices)
+            GL.glDrawArrays(GL.GL_TRIANGLES, 0, self.people_first)
+            self._draw_people_triangles(GL)
         if not read:
             GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
             return None
@@ -191,6 +196,33 @@ class Rasteriser:
             out = self.pixels[bands]
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
         return out
+
+    def _draw_people_triangles(self, GL) -> None:
+        """Draw the people's triangles (the tail of the vertex buffer) in the current viewport, front faces only.
+
+        A person is a closed convex surface for every camera above the floor (the open
+        bottom faces the floor), so a back face's fragment always lies behind a front face's
+        at the same pixel: culling the back faces leaves every covered pixel and label as
+        it was, and llvmpipe rasterises ~40 % fewer triangles (the side's far half). Only
+        where a front and a back face tie in depth on the outline does the front face's
+        colour now win, as a camera would see it. The meshes wind counter-clockwise seen
+        from outside; the projection flips rows (``flip_rows``), which makes outward faces
+        clockwise in window coordinates. ``cull_back_faces = False`` draws both (tests).
+        """
+        count = self.n_vertices - self.people_first
+        if count == 0:
+            return
+        if not self.cull_back_faces:
+            GL.glDrawArrays(GL.GL_TRIANGLES, self.people_first, count)
+            return
+        GL.glEnable(GL.GL_CULL_FACE)
+        GL.glFrontFace(GL.GL_CW)
+        GL.glCullFace(GL.GL_BACK)
+        try:
+            GL.glDrawArrays(GL.GL_TRIANGLES, self.people_first, count)
+        finally:
+            GL.glDisable(GL.GL_CULL_FACE)
+            GL.glFrontFace(GL.GL_CCW)
 
     def _state(self, GL) -> None:
         """The fixed pipeline state of every pass (bound program, VAO and framebuffer)."""
@@ -288,11 +320,10 @@ class Rasteriser:
         self._state(GL)
         self._set_offsets(GL, offsets_xy)
         vp = np.ascontiguousarray(view_projs, np.float32)
-        count = self.n_vertices - self.people_first
         for k in todo:
             GL.glViewport(0, int(bands[k]) * H, self.width, H)
             GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, vp[k])
-            GL.glDrawArrays(GL.GL_TRIANGLES, self.people_first, count)
+            self._draw_people_triangles(GL)
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, self.width)
         GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)

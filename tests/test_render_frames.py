@@ -75,3 +75,25 @@ def test_render_checks_its_input(lab, lab_renderer, three_people):
         lab_renderer.render(three_people)
     with pytest.raises(ValueError, match="cameras"):
         lab_renderer.render(three_people, cameras=[17], clean=True)
+
+
+@pytest.mark.parametrize("people", [[[2.0, 2.0], [4.5, 3.0], [3.0, 4.3]],
+                                    [[3.0, 3.0], [3.45, 3.05], [3.2, 3.5]]])   # apart, and occluding each other
+def test_culling_back_faces_keeps_every_label(lab, lab_renderer, people):
+    """The people's back faces are culled: same labels as drawing both faces, colour only on outlines."""
+    pos = np.array(people)
+    culled = lab_renderer.render(pos, clean=True)
+    lab_renderer.raster.cull_back_faces = False
+    try:
+        both = lab_renderer.render(pos, clean=True)
+    finally:
+        lab_renderer.raster.cull_back_faces = True
+    assert np.array_equal(culled.labels, both.labels)
+    changed = (culled.rgb != both.rgb).any(-1)
+    assert changed.sum() <= 1e-4 * changed.size, changed.sum()
+    outline = np.zeros_like(changed)
+    for k in range(len(culled.labels)):             # a changed pixel lies on a person's outline
+        lab_k = culled.labels[k]
+        edge = cv2.morphologyEx(lab_k, cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8)) > 0
+        outline[k] = cv2.dilate(edge.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    assert not (changed & ~outline).any()
