@@ -7,7 +7,7 @@ down so that ``glReadPixels`` returns rows top first, and one ``glReadPixels`` r
 all cameras at once into a preallocated ``(n_cams, H, W, 4)`` array: RGB is the baked
 vertex colour, interpolated across the triangle; alpha is the exact label (person
 index + 1, 0 for the room), written from a ``flat`` varying. No lighting, no MSAA, no
-blending. The people's back faces are culled (:meth:`Rasteriser._draw_people_triangles`);
+blending. The people's back faces are culled (:meth:`Rasteriser._draw_range`);
 the room's faces are all drawn.
 
 :meth:`Rasteriser.draw` draws everything (the room, the benchmark floor, the tests'
@@ -67,7 +67,7 @@ class Rasteriser:
     n_people : how many people the mesh holds (size of the offsets uniform)
     """
 
-    #: Cull the people's back faces (see :meth:`_draw_people_triangles`).
+    #: Cull the people's back faces (see :meth:`_draw_range`); False draws both (tests).
     cull_back_faces = True
 
     def __init__(self, mesh: Mesh, n_people: int, width: int, height: int, n_tiles: int,
@@ -175,11 +175,10 @@ class Rasteriser:
                 GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
             GL.glDisable(GL.GL_SCISSOR_TEST)
         vp = np.ascontiguousarray(view_projs, np.float32)
-        for i in range(n):
-            GL.glViewport(0, int(bands[i]) * self.height, self.width, self.height)
-            GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, vp[i])
-            GL.glDrawArrays(GL.GL_TRIANGLES, 0, self.people_first)
-            self._draw_people_triangles(GL)
+        # every camera's room, then every camera's people: the bands are disjoint, so each
+        # camera still gets its room before its people
+        self._draw_range(GL, vp, bands, 0, self.people_first)
+        self._draw_range(GL, vp, bands, self.people_first, self.n_vertices - self.people_first, cull=True)
         if not read:
             GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
             return None
@@ -197,32 +196,29 @@ class Rasteriser:
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
         return out
 
-    def _draw_people_triangles(self, GL) -> None:
-        """Draw the people's triangles (the tail of the vertex buffer) in the current viewport, front faces only.
+    def _draw_range(self, GL, view_projs: np.ndarray, bands, first: int, count: int,
+                    cull: bool = False) -> None:
+        """Draw vertices ``first .. first + count`` once per camera, camera k in band ``bands[k]``.
 
+        cull : cull back faces (for the people's triangles; with :attr:`cull_back_faces`).
         A person is a closed convex surface for every camera above the floor (the open
         bottom faces the floor), so a back face's fragment always lies behind a front face's
         at the same pixel: culling the back faces leaves every covered pixel and label as
         it was, and llvmpipe rasterises ~40 % fewer triangles (the side's far half). Only
         where a front and a back face tie in depth on the outline does the front face's
-        colour now win, as a camera would see it. The meshes wind counter-clockwise seen
-        from outside; the projection flips rows (``flip_rows``), which makes outward faces
-        clockwise in window coordinates. ``cull_back_faces = False`` draws both (tests).
+        colour now win, as a camera would see it. Front faces are set in :meth:`_state`.
         """
-        count = self.n_vertices - self.people_first
         if count == 0:
             return
-        if not self.cull_back_faces:
-            GL.glDrawArrays(GL.GL_TRIANGLES, self.people_first, count)
-            return
-        GL.glEnable(GL.GL_CULL_FACE)
-        GL.glFrontFace(GL.GL_CW)
-        GL.glCullFace(GL.GL_BACK)
+        if cull and self.cull_back_faces:
+            GL.glEnable(GL.GL_CULL_FACE)
         try:
-            GL.glDrawArrays(GL.GL_TRIANGLES, self.people_first, count)
+            for k, b in enumerate(bands):
+                GL.glViewport(0, int(b) * self.height, self.width, self.height)
+                GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, view_projs[k])
+                GL.glDrawArrays(GL.GL_TRIANGLES, first, count)
         finally:
             GL.glDisable(GL.GL_CULL_FACE)
-            GL.glFrontFace(GL.GL_CCW)
 
     def _state(self, GL) -> None:
         """The fixed pipeline state of every pass (bound program, VAO and framebuffer)."""
@@ -231,6 +227,8 @@ class Rasteriser:
         GL.glBindVertexArray(self.vao)
         GL.glDisable(GL.GL_BLEND)
         GL.glDisable(GL.GL_CULL_FACE)
+        GL.glFrontFace(GL.GL_CW)          # meshes wind counter-clockwise seen from outside,
+        GL.glCullFace(GL.GL_BACK)         # and the projection flips rows (flip_rows)
         GL.glDisable(GL.GL_MULTISAMPLE)
         GL.glDisable(GL.GL_DITHER)
         GL.glEnable(GL.GL_DEPTH_TEST)
@@ -320,10 +318,8 @@ class Rasteriser:
         self._state(GL)
         self._set_offsets(GL, offsets_xy)
         vp = np.ascontiguousarray(view_projs, np.float32)
-        for k in todo:
-            GL.glViewport(0, int(bands[k]) * H, self.width, H)
-            GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, vp[k])
-            self._draw_people_triangles(GL)
+        self._draw_range(GL, vp[todo], bands[todo], self.people_first, self.n_vertices - self.people_first,
+                         cull=True)
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, self.width)
         GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
