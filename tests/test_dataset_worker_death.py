@@ -1,4 +1,4 @@
-"""A Dask worker killed in the middle of an episode: the episode is redone, not lost."""
+"""A Dask worker killed in the middle of an episode: the episode is redone, not lost; Ctrl-C on a run."""
 
 import json
 import os
@@ -44,3 +44,27 @@ def test_killed_worker_episode_is_redone(tmp_path):
     assert [e["name"] for e in m["episodes"]] == ["episode_0000"]
     assert max(p.name for p in (out / "episode_0000" / "frames" / "cam07").iterdir()) == "000005.png"
     assert not list(out.glob(".*tmp"))
+
+
+def test_ctrl_c_stops_the_run_in_one_line_and_resume_finishes_it(tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "data"
+    args = [sys.executable, "-m", "testbed.cli", "render", "lab", "--episodes", "4", "--frames", "12",
+            "--cameras", "2,7", "--seed", "3", "--workers", "2", "--out", str(out)]
+    proc = subprocess.Popen(args, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.time() + 120
+    while not (out / "episode_0000").is_dir() and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.02)
+    os.killpg(proc.pid, signal.SIGINT)                     # as Ctrl-C in a terminal: every process
+    err = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert err.rstrip().endswith("camtask render: interrupted")
+    m = json.loads((out / "manifest.json").read_text())
+    assert 1 <= len(m["episodes"]) < 4                     # finished episodes listed, not all
+    assert not list(out.glob(".*tmp"))
+    subprocess.run(args + ["--resume"], check=True, capture_output=True, timeout=300)
+    m = json.loads((out / "manifest.json").read_text())
+    assert [e["name"] for e in m["episodes"]] == [f"episode_{i:04d}" for i in range(4)]

@@ -22,3 +22,16 @@ def test_workers_keep_glibc_malloc_defaults_and_one_opencv_thread():
         envs = list(client.run(_env).values())
     assert envs == [{"MALLOC_TRIM_THRESHOLD_": None, "OMP_NUM_THREADS": "1", "LP_NUM_THREADS": "1",
                      "OPENCV_FOR_THREADS_NUM": "1", "cv2_threads": 1}]     # one OpenCV thread too
+
+
+def _sigint_handler():
+    import signal
+
+    return signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+
+
+def test_local_workers_ignore_ctrl_c():
+    # Ctrl-C reaches the whole process group: the client stops the cluster, the workers
+    # must not each print a KeyboardInterrupt traceback (end to end: test_dataset_worker_death)
+    with open_client(2) as client:
+        assert list(client.run(_sigint_handler).values()) == [True, True]
