@@ -76,7 +76,8 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
     workers : int >= 0 or None (the number of cores); ignored when ``scheduler`` is given
     scheduler : address of an existing scheduler, e.g. ``"tcp://10.0.0.5:8786"``
     connect_timeout : seconds to wait for ``scheduler`` before giving up
-    Local workers get :data:`WORKER_ENV`; an existing cluster keeps its own environment.
+    Local workers get :data:`WORKER_ENV` and ignore SIGINT (:func:`dask_setup`: Ctrl-C stops
+    the run here, once); an existing cluster keeps its own environment.
     """
     if scheduler is None and workers is not None and int(workers) < 0:
         raise ValueError(f"workers: expected an integer >= 0, got {workers}")
