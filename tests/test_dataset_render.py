@@ -1,4 +1,4 @@
-"""camtask render datasets: layout, manifest checksums, same bytes for any worker count,
+"""camtask render datasets: layout, manifest checksums, same bytes for any worker count or on an existing cluster,
 resume after a kill, exact silhouettes, ground-truth hulls, lossless video, bad input."""
 
 import hashlib
@@ -148,6 +148,17 @@ def test_silhouettes_exact_with_sixteen_bit_masks():
 def test_same_bytes_with_two_workers(dataset, tmp_path):
     out = tmp_path / "two"
     assert main(ARGS + ["--out", str(out), "--workers", "2"]) == 0
+    a, b = files_of(dataset), files_of(out)
+    assert sorted(a) == sorted(b)
+    assert [k for k in a if a[k] != b[k]] == []
+
+
+def test_same_bytes_on_an_existing_cluster(dataset, tmp_path):
+    from distributed import LocalCluster
+
+    out = tmp_path / "sched"
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        assert main(ARGS + ["--out", str(out), "--scheduler", cluster.scheduler_address]) == 0
     a, b = files_of(dataset), files_of(out)
     assert sorted(a) == sorted(b)
     assert [k for k in a if a[k] != b[k]] == []
