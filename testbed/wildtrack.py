@@ -7,6 +7,7 @@
         {"personID": i, "positionID": x_index + GRID_WIDTH * y_index,
          "views": [{"viewNum": v, "xmin": .., "ymin": .., "xmax": .., "ymax": ..}, ...]}
     OUT/calibrations/intrinsic_zero/intr_C<n>.xml   cv2.FileStorage: camera_matrix, distortion_coefficients
+                                                    (zeros with ``undistort``)
     OUT/calibrations/extrinsic/extr_C<n>.xml        cv2.FileStorage: rvec, tvec (world -> camera, metres)
     OUT/grid.json                                   the ground grid below, and view -> camera number
 
@@ -15,8 +16,14 @@ Ground grid: origin at the world origin (the room corner), cells of ``CELL`` = 0
 ``y_index = floor(y / CELL)`` along the 19 ft wall (0..231), ``positionID = x_index +
 grid_width * y_index`` (WILDTRACK's own convention, with its 480 replaced by our grid
 width, 269 for the lab). Boxes are inclusive pixel bounds of the person's *visible*
-label mask in the distorted image, all -1 when the person is not visible in that view;
+label mask in the image as exported, all -1 when the person is not visible in that view;
 ``viewNum`` is 0-based over the episode's cameras in number order.
+
+Images are the rendered, lens-distorted frames, and ``intrinsic_zero`` holds the true
+distortion coefficients. With ``undistort`` (as WILDTRACK's own ``intrinsic_zero``
+files, and what code that projects with ``K [R | t]`` alone expects) every frame is
+remapped to the pinhole camera with the same camera matrix and no distortion (bilinear;
+the label masks for the boxes by nearest neighbour), and the coefficients written are zeros.
 """
 
 from __future__ import annotations
@@ -77,8 +84,17 @@ def _write_fs(path: Path, **mats) -> None:
         fs.release()
 
 
-def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike) -> Path:
-    """Write episode folder ``episode`` to ``out`` in the WILDTRACK layout (atomically); return ``out``."""
+def undistort_maps(K: np.ndarray, dist: np.ndarray, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Float maps (h, w) float32 x and y into the distorted image for the pinhole image of
+    the same camera matrix ``K`` (3, 3), pixels; ``dist`` (5,); ``size`` = (w, h) pixels."""
+    return cv2.initUndistortRectifyMap(K, dist, None, K, size, cv2.CV_32FC1)
+
+
+def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undistort: bool = False) -> Path:
+    """Write episode folder ``episode`` to ``out`` in the WILDTRACK layout (atomically); return ``out``.
+
+    undistort : export pinhole images (and boxes) with zero distortion coefficients
+    """
     import yaml
 
     from pipeline.io import read_labels
@@ -98,25 +114,23 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike) -> Path
     try:
         for sub in ("annotations_positions", "calibrations/intrinsic_zero", "calibrations/extrinsic"):
             (tmp / sub).mkdir(parents=True)
+        maps = {}                              # camera number -> undistortion maps (undistort only)
         for n in numbers:
             (tmp / "Image_subsets" / f"C{n}").mkdir(parents=True)
             c = read_calibration(episode / "calibration" / f"cam{n:02d}.yaml")
+            dist = c["dist"].reshape(1, 5)
+            if undistort:
+                maps[n] = undistort_maps(c["K"], c["dist"], (c["width"], c["height"]))
+                dist = np.zeros_like(dist)
             _write_fs(tmp / "calibrations" / "intrinsic_zero" / f"intr_C{n}.xml",
-                      camera_matrix=c["K"], distortion_coefficients=c["dist"].reshape(1, 5))
+                      camera_matrix=c["K"], distortion_coefficients=dist)
             _write_fs(tmp / "calibrations" / "extrinsic" / f"extr_C{n}.xml",
                       rvec=c["rvec"].reshape(3, 1), tvec=c["tvec"].reshape(3, 1))
-        if meta.get("format") == "video":
-            from testbed.lossless import read_video
-            for n in numbers:
-                for f, rgb in enumerate(read_video(episode / "frames" / f"cam{n:02d}.mkv")):
-                    write_png(tmp / "Image_subsets" / f"C{n}" / f"{f:08d}.png", rgb)
-        else:
-            for n in numbers:
-                for f in range(frames):
-                    shutil.copyfile(episode / "frames" / f"cam{n:02d}" / f"{f:06d}.png",
-                                    tmp / "Image_subsets" / f"C{n}" / f"{f:08d}.png")
+        for n in numbers:
+            _export_frames(episode, meta, n, frames, tmp / "Image_subsets" / f"C{n}", maps.get(n))
         for f in range(frames):
-            labels = np.stack([read_labels(episode / "masks" / f"cam{n:02d}" / f"{f:06d}.png") for n in numbers])
+            labels = np.stack([_remapped(read_labels(episode / "masks" / f"cam{n:02d}" / f"{f:06d}.png")
+                                         .astype(np.uint16), maps.get(n), cv2.INTER_NEAREST) for n in numbers])
             b = boxes(labels, P)
             rows = table[table["frame"] == f]
             xy = np.column_stack([rows["x"], rows["y"]]).astype(float)
@@ -130,7 +144,7 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike) -> Path
             "cell_m": CELL, "origin_m": [0.0, 0.0], "grid_width": gw, "grid_height": gh,
             "position_id": "x_index + grid_width * y_index, x_index = floor(x / cell_m)",
             "views": {str(v): n for v, n in enumerate(numbers)}, "units": "metres, world frame",
-            "source": str(episode)}, indent=1) + "\n")
+            "undistorted": bool(undistort), "source": str(episode)}, indent=1) + "\n")
         if out.exists():
             shutil.rmtree(out)
         os.rename(tmp, out)
@@ -138,3 +152,26 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike) -> Path
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return out
+
+
+def _remapped(image: np.ndarray, maps, interpolation: int) -> np.ndarray:
+    """``image`` through the undistortion ``maps`` (or unchanged when ``maps`` is None)."""
+    if maps is None:
+        return image
+    return cv2.remap(image, maps[0], maps[1], interpolation, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+
+
+def _export_frames(episode: Path, meta: dict, number: int, frames: int, dest: Path, maps) -> None:
+    """Camera ``number``'s RGB frames to ``dest/NNNNNNNN.png``: copied PNGs, or decoded video, or undistorted."""
+    if meta.get("format") == "video":
+        from testbed.lossless import read_video
+        for f, rgb in enumerate(read_video(episode / "frames" / f"cam{number:02d}.mkv")):
+            write_png(dest / f"{f:08d}.png", _remapped(rgb, maps, cv2.INTER_LINEAR))
+        return
+    for f in range(frames):
+        src = episode / "frames" / f"cam{number:02d}" / f"{f:06d}.png"
+        if maps is None:
+            shutil.copyfile(src, dest / f"{f:08d}.png")
+        else:
+            rgb = cv2.cvtColor(cv2.imread(str(src), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+            write_png(dest / f"{f:08d}.png", _remapped(rgb, maps, cv2.INTER_LINEAR))

@@ -62,3 +62,59 @@ def test_export_wildtrack(tmp_path):
     assert position_id([[0.0, 0.0]], 269).tolist() == [0]
     assert main(["export", "wildtrack", str(data), str(out)]) == 2          # OUT exists
     assert main(["export", "wildtrack", str(data), str(tmp_path / "x"), "--episode", "5"]) == 2
+
+
+def _calibration(out, n):
+    fs = cv2.FileStorage(str(out / "calibrations" / "intrinsic_zero" / f"intr_C{n}.xml"), cv2.FILE_STORAGE_READ)
+    K, dist = fs.getNode("camera_matrix").mat(), fs.getNode("distortion_coefficients").mat()
+    fs.release()
+    fs = cv2.FileStorage(str(out / "calibrations" / "extrinsic" / f"extr_C{n}.xml"), cv2.FILE_STORAGE_READ)
+    rvec, tvec = fs.getNode("rvec").mat(), fs.getNode("tvec").mat()
+    fs.release()
+    return K, dist, rvec, tvec
+
+
+def _box_errors(out, people, frames, ignore_distortion=False):
+    """Largest |box - projected cylinder's box|, pixels, per view where one person is wholly in the image."""
+    errors = []
+    a, z = np.meshgrid(np.linspace(0, 2 * np.pi, 720, endpoint=False), np.linspace(0, 1, 200))
+    views = json.loads((out / "grid.json").read_text())["views"]
+    for f in range(frames):
+        (ann,) = json.loads((out / "annotations_positions" / f"{f:08d}.json").read_text())
+        (p,) = people[people["frame"] == f]
+        surface = np.stack([p["x"] + p["radius"] * np.cos(a).ravel(), p["y"] + p["radius"] * np.sin(a).ravel(),
+                            p["height"] * z.ravel()], 1)                       # metres, world frame
+        for v, n in views.items():
+            K, dist, rvec, tvec = _calibration(out, n)
+            if (cv2.Rodrigues(rvec)[0] @ surface.T + tvec)[2].min() <= 0:
+                continue
+            uv = cv2.projectPoints(surface, rvec, tvec, K, 0 * dist if ignore_distortion else dist)[0].reshape(-1, 2)
+            if uv.min() < 0 or uv[:, 0].max() > 639 or uv[:, 1].max() > 479:
+                continue
+            b = ann["views"][int(v)]
+            box = np.array([b["xmin"], b["ymin"], b["xmax"], b["ymax"]])
+            errors.append(np.abs(np.r_[uv.min(0), uv.max(0)] - box).max())
+    return np.array(errors)
+
+
+@pytest.mark.render
+def test_boxes_match_the_exported_calibration_with_and_without_undistortion(tmp_path):
+    # one person: the box is the whole cylinder's, which the exported calibration projects
+    data = tmp_path / "data"
+    assert main(["render", "lab", "--frames", "3", "--seed", "5", "--people", "1", "--out", str(data),
+                 "--workers", "0"]) == 0
+    people = read_people(data / "episode_0000" / "people.csv")
+    raw, pinhole = tmp_path / "raw", tmp_path / "pinhole"
+    assert main(["export", "wildtrack", str(data), str(raw)]) == 0
+    assert main(["export", "wildtrack", str(data), str(pinhole), "--undistort"]) == 0
+    assert not json.loads((raw / "grid.json").read_text())["undistorted"]
+    assert json.loads((pinhole / "grid.json").read_text())["undistorted"]
+    for n in range(1, 17):
+        assert np.abs(_calibration(raw, n)[1]).max() > 0 and not _calibration(pinhole, n)[1].any()
+    e_raw, e_pinhole = _box_errors(raw, people, 3), _box_errors(pinhole, people, 3)
+    assert len(e_raw) >= 10 and len(e_pinhole) >= 10
+    assert e_raw.max() < 1.5 and e_pinhole.max() < 1.5          # rasterisation: within a pixel and a half
+    # the distorted frames projected with the camera matrix alone miss by several pixels
+    assert _box_errors(raw, people, 3, ignore_distortion=True).max() > 4
+    img = cv2.imread(str(pinhole / "Image_subsets" / "C3" / "00000000.png"))
+    assert img.shape == (480, 640, 3) and (img.reshape(-1, 3).any(axis=1)).all()   # no empty border

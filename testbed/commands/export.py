@@ -1,4 +1,4 @@
-"""``camtask export wildtrack DIR OUT [--episode N]``: an episode in the WILDTRACK layout.
+"""``camtask export wildtrack DIR OUT [--episode N] [--undistort]``: an episode in the WILDTRACK layout.
 
 See :mod:`testbed.wildtrack` and docs/dataset.md for the layout, the ground grid and
 positionID.
@@ -18,6 +18,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("dir", metavar="DIR", help="dataset folder from `camtask render` (or one episode folder)")
     p.add_argument("out", metavar="OUT", help="output folder (must not exist or be empty)")
     p.add_argument("--episode", type=int, default=0, help="episode index (default 0)")
+    p.add_argument("--undistort", action="store_true",
+                   help="pinhole images: frames undistorted to the same camera matrix, zero distortion "
+                        "coefficients written (as WILDTRACK's intrinsic_zero; default: the rendered frames "
+                        "and their true coefficients)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing non-empty OUT")
     p.set_defaults(func=run)
 
@@ -34,6 +38,7 @@ def run(args) -> int:
     if not (episode / "meta.json").is_file():
         raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
     check_output_dir(args.out, args.overwrite)
-    export_wildtrack(episode, args.out)
-    print(f"wrote {episode} as WILDTRACK layout to {args.out}", file=sys.stderr)
+    export_wildtrack(episode, args.out, undistort=args.undistort)
+    print(f"wrote {episode} as WILDTRACK layout{' (undistorted)' if args.undistort else ''} to {args.out}",
+          file=sys.stderr)
     return 0
