@@ -154,11 +154,13 @@ def test_same_bytes_with_two_workers(dataset, tmp_path):
 
 
 def test_same_bytes_on_an_existing_cluster(dataset, tmp_path):
-    from distributed import LocalCluster
+    from testbed.parallel import open_client
 
     out = tmp_path / "sched"
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-        assert main(ARGS + ["--out", str(out), "--scheduler", cluster.scheduler_address]) == 0
+    # a cluster of this process, reached by its address (a plain LocalCluster would leave
+    # Dask's MALLOC_TRIM_THRESHOLD_ in os.environ for every later cluster of the session)
+    with open_client(1) as client:
+        assert main(ARGS + ["--out", str(out), "--scheduler", client.scheduler.address]) == 0
     a, b = files_of(dataset), files_of(out)
     assert sorted(a) == sorted(b)
     assert [k for k in a if a[k] != b[k]] == []
