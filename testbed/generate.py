@@ -8,9 +8,10 @@
                                (the only file that differs between identical runs)
     DIR/episode_NNNN/          one episode (testbed.episodes, docs/dataset.md)
 
-The manifest is rewritten atomically (temporary file + os.replace) after each finished
-episode, and lists episodes in index order with sorted keys, so two runs with the same
-arguments give the same manifest whatever the worker count or completion order.
+The manifest is written before the first episode (with none listed) and rewritten
+atomically (temporary file + os.replace) after each finished episode; it lists episodes
+in index order with sorted keys, so two runs with the same arguments give the same
+manifest whatever the worker count or completion order.
 """
 
 from __future__ import annotations
@@ -124,7 +125,9 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     Without ``resume`` or ``overwrite`` an existing non-empty ``out`` is refused; with
     ``overwrite`` it is emptied; with ``resume`` the manifest's episodes whose files
     verify are kept and everything else (unlisted or corrupt episode folders, temporary
-    folders of killed runs) is removed. Raises ValueError / FileExistsError before any work.
+    folders of killed runs) is removed. Then the manifest of the kept episodes is written
+    (none on a fresh run: a run stopped before its first episode still names its
+    arguments). Raises ValueError / FileExistsError before any work.
     """
     out = check_out(out, resume, overwrite)
     existing = [p for p in out.iterdir()]
@@ -132,8 +135,7 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     if overwrite:
         for p in existing:
             shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
-        return keep
-    if resume and existing:
+    elif resume and existing:
         old = read_manifest(out)
         if old is not None:
             if old.get("config") != config.to_dict() or old.get("episodes_planned") != episodes:
@@ -142,14 +144,26 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
             for entry in old.get("episodes", []):
                 if verify_episode(out, entry):
                     keep[int(entry["index"])] = entry
-        wanted = {episode_name(i) for i in keep}
-        for p in existing:
-            if p.name in (MANIFEST, RUN_INFO) or p.name in wanted:
-                continue
-            if p.name.startswith("episode_") or (p.name.startswith(".episode_") and p.name.endswith(".tmp")):
-                shutil.rmtree(p, ignore_errors=True)
-        write_json_atomic(out / MANIFEST, manifest(config, episodes, keep))
+        remove_unlisted(out, keep)
+    write_json_atomic(out / MANIFEST, manifest(config, episodes, keep))
     return keep
+
+
+def remove_unlisted(out: Path, entries: dict[int, dict] | None = None) -> None:
+    """Delete the episode folders of ``out`` not in ``entries`` (default: the manifest's) and
+    the temporary folders of unfinished episodes.
+
+    Only when nothing writes to ``out`` any more: after a run, once its workers have stopped.
+    """
+    if entries is None:
+        m = read_manifest(out)
+        entries = {int(e["index"]): e for e in (m or {}).get("episodes", [])}
+    wanted = {episode_name(i) for i in entries}
+    for p in Path(out).iterdir():
+        if p.name in wanted:
+            continue
+        if p.name.startswith("episode_") or (p.name.startswith(".episode_") and p.name.endswith(".tmp")):
+            shutil.rmtree(p, ignore_errors=True)
 
 
 def _diff(old: dict, config: EpisodeConfig, episodes: int) -> str:
@@ -184,7 +198,9 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
         and at least every 0.25 s)
     retries : Dask resubmits an episode whose worker died this many times
     The manifest is rewritten after every finished episode; on an error, the episodes
-    finished so far stay listed and valid, and the error is re-raised.
+    finished so far stay listed and valid, and the error is re-raised. Temporary folders
+    of dead workers are removed when every episode has finished; after an error, workers
+    may still be writing: the caller calls :func:`remove_unlisted` once they have stopped.
     """
     out = Path(out)
     done = dict(keep)
@@ -193,6 +209,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
             "versions": versions(), "argv": sys.argv[1:]} | (run_info or {})
     hosts: dict[str, str] = {}
     stages: dict[str, dict] = {}
+    complete = False
 
     def finished(entry: dict, host: str, secs: dict) -> None:
         done[entry["index"]] = entry
@@ -236,9 +253,11 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
             finally:
                 for f in futures:
                     f.cancel()
+        complete = True
     finally:
-        for p in out.glob(".episode_*.tmp"):        # left behind by workers that died
-            shutil.rmtree(p, ignore_errors=True)
+        if complete or client is None:              # else cancelled episodes may still be running
+            for p in out.glob(".episode_*.tmp"):    # left behind by workers that died
+                shutil.rmtree(p, ignore_errors=True)
         info |= {"finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "episodes_done": len(done),
                  "episode_hosts": dict(sorted(hosts.items())), "episode_seconds": dict(sorted(stages.items()))}
         write_json_atomic(out / RUN_INFO, info)

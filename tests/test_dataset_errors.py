@@ -68,3 +68,25 @@ def test_full_disk_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
     # 101 x 16 frames of 640 x 480 x 3 bytes at DISK_FRACTION 0.6
     assert code == 2 and line == f"camtask render: error: --out: 50 MB free on {tmp_path}; one episode needs about 894 MB"
     assert seen == [tmp_path] and not (tmp_path / "new").exists()
+
+
+def test_manifest_before_the_first_episode_and_unlisted_folders_removed(tmp_path):
+    import json
+
+    from pipeline import load_params
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import prepare_output, remove_unlisted
+
+    config = EpisodeConfig("lab", None, (2, 7), 4, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    assert prepare_output(out, config, 3, False, False) == {}
+    m = json.loads((out / "manifest.json").read_text())
+    assert m["episodes"] == [] and m["episodes_planned"] == 3 and m["config"] == config.to_dict()
+    # a run stopped before its first episode is still recognised
+    other = EpisodeConfig("lab", None, (2, 7), 5, 1, "png", load_params().to_dict())
+    with pytest.raises(ValueError, match="frames: 4 then, 5 now"):
+        prepare_output(out, other, 3, True, False)
+    for name in ("episode_0001", ".episode_0002.x1.tmp", "notes"):
+        (out / name).mkdir()
+    remove_unlisted(out)
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "notes"]

@@ -91,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
         free_bytes,
         generate,
         prepare_output,
+        remove_unlisted,
         size_text,
     )
     from testbed.parallel import default_workers, open_client
@@ -106,24 +107,33 @@ def run(args: argparse.Namespace) -> int:
         # one process per core, never more than there are episodes; one episode runs here
         workers = min(default_workers(), args.episodes)
         workers = 0 if workers == 1 else workers
-    with open_client(workers, args.scheduler) as client:
-        keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
-        todo = args.episodes - len(keep)
-        if todo == 0:
-            print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
-            return 0
-        if args.overwrite or args.resume:
-            check_space(out, estimate_bytes(config, scene, 1), "one episode")
-        need, (free, where) = estimate_bytes(config, scene, todo), free_bytes(out)
-        if free < need:
-            print(f"warning: --out: {size_text(free)} free on {where}; {todo} episodes need about "
-                  f"{size_text(need)}: the run stops when the disk is full (the finished episodes stay "
-                  "valid; --resume finishes it)", file=sys.stderr)
-        with tqdm(total=todo * args.frames, desc="render", unit="frame", file=sys.stderr,
-                  dynamic_ncols=True) as bar:
-            info = {"workers": workers, "scheduler": args.scheduler,
-                    "progress": "frames, per frame in-process, polled from temporary folders on Dask"}
-            done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
+    started = False
+    try:
+        with open_client(workers, args.scheduler) as client:
+            keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
+            todo = args.episodes - len(keep)
+            if todo == 0:
+                print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
+                return 0
+            if args.overwrite or args.resume:
+                check_space(out, estimate_bytes(config, scene, 1), "one episode")
+            need, (free, where) = estimate_bytes(config, scene, todo), free_bytes(out)
+            if free < need:
+                print(f"warning: --out: {size_text(free)} free on {where}; {todo} episodes need about "
+                      f"{size_text(need)}: the run stops when the disk is full (the finished episodes stay "
+                      "valid; --resume finishes it)", file=sys.stderr)
+            with tqdm(total=todo * args.frames, desc="render", unit="frame", file=sys.stderr,
+                      dynamic_ncols=True) as bar:
+                info = {"workers": workers, "scheduler": args.scheduler,
+                        "progress": "frames, per frame in-process, polled from temporary folders on Dask"}
+                started = True
+                done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
+    finally:
+        if started and args.scheduler is None:
+            # the local workers have stopped: drop episodes they finished after the manifest's
+            # last write and their temporary folders (an existing cluster's running episodes
+            # cannot be stopped from here; --resume removes what they leave)
+            remove_unlisted(out)
     print(f"wrote {len(done) - len(keep)} episodes x {args.frames} frames to {out} "
           f"({len(done)}/{args.episodes} finished)", file=sys.stderr)
     return 0
