@@ -52,12 +52,7 @@ def test_export_wildtrack(tmp_path):
     seen = sum(a["views"][v]["xmin"] >= 0 for a in ann for v in range(3))
     assert seen >= 3
     for n in (1, 6, 12):
-        fs = cv2.FileStorage(str(out / "calibrations" / "intrinsic_zero" / f"intr_C{n}.xml"), cv2.FILE_STORAGE_READ)
-        K, dist = fs.getNode("camera_matrix").mat(), fs.getNode("distortion_coefficients").mat()
-        fs.release()
-        fs = cv2.FileStorage(str(out / "calibrations" / "extrinsic" / f"extr_C{n}.xml"), cv2.FILE_STORAGE_READ)
-        rvec, tvec = fs.getNode("rvec").mat(), fs.getNode("tvec").mat()
-        fs.release()
+        K, dist, rvec, tvec = _calibration(out, n)
         assert K.shape == (3, 3) and dist.shape == (1, 5) and rvec.shape == tvec.shape == (3, 1)
     assert position_id([[0.0, 0.0]], 269).tolist() == [0]
     assert main(["export", "wildtrack", str(data), str(out)]) == 2          # OUT exists
