@@ -33,6 +33,8 @@ import math
 import os
 import shutil
 import tempfile
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import cv2
@@ -90,16 +92,19 @@ def undistort_maps(K: np.ndarray, dist: np.ndarray, size: tuple[int, int]) -> tu
     return cv2.initUndistortRectifyMap(K, dist, None, K, size, cv2.CV_32FC1)
 
 
-def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undistort: bool = False) -> Path:
+def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undistort: bool = False,
+                     progress: Callable[[int], None] | None = None) -> Path:
     """Write episode folder ``episode`` to ``out`` in the WILDTRACK layout (atomically); return ``out``.
 
     undistort : export pinhole images (and boxes) with zero distortion coefficients
+    progress : called with 1 for every image written (from several threads)
+    Cameras are exported on a thread per core (OpenCV and the PNG encoder release the GIL).
     """
     import yaml
 
-    from pipeline.io import read_labels
     from scene import Scene
     from testbed.dataset import read_calibration
+    from testbed.parallel import default_workers
 
     episode, out = Path(episode), Path(out)
     meta = json.loads((episode / "meta.json").read_text())
@@ -126,18 +131,17 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undisto
                       camera_matrix=c["K"], distortion_coefficients=dist)
             _write_fs(tmp / "calibrations" / "extrinsic" / f"extr_C{n}.xml",
                       rvec=c["rvec"].reshape(3, 1), tvec=c["tvec"].reshape(3, 1))
-        for n in numbers:
-            _export_frames(episode, meta, n, frames, tmp / "Image_subsets" / f"C{n}", maps.get(n))
+        with ThreadPoolExecutor(max_workers=min(default_workers(), len(numbers))) as pool:
+            b = np.stack(list(pool.map(
+                lambda n: _export_camera(episode, meta, n, P, tmp / "Image_subsets" / f"C{n}", maps.get(n), progress),
+                numbers)), axis=1)                                     # (frames, n_cams, P, 4)
         for f in range(frames):
-            labels = np.stack([_remapped(read_labels(episode / "masks" / f"cam{n:02d}" / f"{f:06d}.png")
-                                         .astype(np.uint16), maps.get(n), cv2.INTER_NEAREST) for n in numbers])
-            b = boxes(labels, P)
             rows = table[table["frame"] == f]
             xy = np.column_stack([rows["x"], rows["y"]]).astype(float)
             pids = position_id(xy, gw)
             ann = [{"personID": int(rows["person_id"][k]), "positionID": int(pids[k]),
-                    "views": [{"viewNum": v, "xmin": int(b[v, k, 0]), "ymin": int(b[v, k, 1]),
-                               "xmax": int(b[v, k, 2]), "ymax": int(b[v, k, 3])} for v in range(len(numbers))]}
+                    "views": [{"viewNum": v, "xmin": int(b[f, v, k, 0]), "ymin": int(b[f, v, k, 1]),
+                               "xmax": int(b[f, v, k, 2]), "ymax": int(b[f, v, k, 3])} for v in range(len(numbers))]}
                    for k in range(len(rows))]
             (tmp / "annotations_positions" / f"{f:08d}.json").write_text(json.dumps(ann))
         (tmp / "grid.json").write_text(json.dumps({
@@ -161,17 +165,28 @@ def _remapped(image: np.ndarray, maps, interpolation: int) -> np.ndarray:
     return cv2.remap(image, maps[0], maps[1], interpolation, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
 
 
-def _export_frames(episode: Path, meta: dict, number: int, frames: int, dest: Path, maps) -> None:
-    """Camera ``number``'s RGB frames to ``dest/NNNNNNNN.png``: copied PNGs, or decoded video, or undistorted."""
+def _export_camera(episode: Path, meta: dict, number: int, people: int, dest: Path, maps,
+                   progress: Callable[[int], None] | None) -> np.ndarray:
+    """Camera ``number``'s RGB frames to ``dest/NNNNNNNN.png`` (copied PNGs, decoded video, or
+    undistorted); returns its boxes (frames, people, 4) int from its label masks (see :func:`boxes`)."""
+    from pipeline.io import read_labels
+
+    frames = int(meta["frames"])
     if meta.get("format") == "video":
         from testbed.lossless import read_video
-        for f, rgb in enumerate(read_video(episode / "frames" / f"cam{number:02d}.mkv")):
-            write_png(dest / f"{f:08d}.png", _remapped(rgb, maps, cv2.INTER_LINEAR))
-        return
-    for f in range(frames):
-        src = episode / "frames" / f"cam{number:02d}" / f"{f:06d}.png"
-        if maps is None:
-            shutil.copyfile(src, dest / f"{f:08d}.png")
+        images = read_video(episode / "frames" / f"cam{number:02d}.mkv")
+    else:
+        images = (episode / "frames" / f"cam{number:02d}" / f"{f:06d}.png" for f in range(frames))
+    out = np.empty((frames, people, 4), int)
+    for f, image in zip(range(frames), images, strict=True):
+        if isinstance(image, Path) and maps is None:
+            shutil.copyfile(image, dest / f"{f:08d}.png")
         else:
-            rgb = cv2.cvtColor(cv2.imread(str(src), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
-            write_png(dest / f"{f:08d}.png", _remapped(rgb, maps, cv2.INTER_LINEAR))
+            if isinstance(image, Path):
+                image = cv2.cvtColor(cv2.imread(str(image), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+            write_png(dest / f"{f:08d}.png", _remapped(image, maps, cv2.INTER_LINEAR))
+        labels = read_labels(episode / "masks" / f"cam{number:02d}" / f"{f:06d}.png").astype(np.uint16)
+        out[f] = boxes(_remapped(labels, maps, cv2.INTER_NEAREST)[None], people)[0]
+        if progress is not None:
+            progress(1)
+    return out

@@ -7,6 +7,7 @@ positionID.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -27,6 +28,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    from tqdm import tqdm
+
     from testbed.dataset import check_output_dir
     from testbed.episodes import episode_name
     from testbed.wildtrack import export_wildtrack
@@ -38,7 +41,10 @@ def run(args) -> int:
     if not (episode / "meta.json").is_file():
         raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
     check_output_dir(args.out, args.overwrite)
-    export_wildtrack(episode, args.out, undistort=args.undistort)
+    meta = json.loads((episode / "meta.json").read_text())
+    with tqdm(total=len(meta["cameras"]) * int(meta["frames"]), desc="export", unit="image", file=sys.stderr,
+              dynamic_ncols=True) as bar:
+        export_wildtrack(episode, args.out, undistort=args.undistort, progress=bar.update)
     print(f"wrote {episode} as WILDTRACK layout{' (undistorted)' if args.undistort else ''} to {args.out}",
           file=sys.stderr)
     return 0

@@ -134,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
             # last write and their temporary folders (an existing cluster's running episodes
             # cannot be stopped from here; --resume removes what they leave)
             remove_unlisted(out)
-    print(f"wrote {len(done) - len(keep)} episodes x {args.frames} frames to {out} "
+    new = len(done) - len(keep)
+    print(f"wrote {new} episode{'s' * (new != 1)} x {args.frames} frames to {out} "
           f"({len(done)}/{args.episodes} finished)", file=sys.stderr)
     return 0
