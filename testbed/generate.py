@@ -198,9 +198,10 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
         and at least every 0.25 s)
     retries : Dask resubmits an episode whose worker died this many times
     The manifest is rewritten after every finished episode; on an error, the episodes
-    finished so far stay listed and valid, and the error is re-raised. Temporary folders
-    of dead workers are removed when every episode has finished; after an error, workers
-    may still be writing: the caller calls :func:`remove_unlisted` once they have stopped.
+    finished so far stay listed and valid, and the error is re-raised. What the manifest
+    does not list (temporary folders of dead workers) is removed when every episode has
+    finished, or in-process; after an error on Dask, workers may still be writing: the
+    caller calls :func:`remove_unlisted` once they have stopped.
     """
     out = Path(out)
     done = dict(keep)
@@ -256,8 +257,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
         complete = True
     finally:
         if complete or client is None:              # else cancelled episodes may still be running
-            for p in out.glob(".episode_*.tmp"):    # left behind by workers that died
-                shutil.rmtree(p, ignore_errors=True)
+            remove_unlisted(out, done)              # temporary folders of workers that died
         info |= {"finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "episodes_done": len(done),
                  "episode_hosts": dict(sorted(hosts.items())), "episode_seconds": dict(sorted(stages.items()))}
         write_json_atomic(out / RUN_INFO, info)

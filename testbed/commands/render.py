@@ -129,10 +129,11 @@ def run(args: argparse.Namespace) -> int:
                 started = True
                 done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
     finally:
-        if started and args.scheduler is None:
+        if started and args.scheduler is None and workers:
             # the local workers have stopped: drop episodes they finished after the manifest's
-            # last write and their temporary folders (an existing cluster's running episodes
-            # cannot be stopped from here; --resume removes what they leave)
+            # last write and their temporary folders (in-process, generate did; an existing
+            # cluster's running episodes cannot be stopped from here; --resume removes what
+            # they leave)
             remove_unlisted(out)
     new = len(done) - len(keep)
     print(f"wrote {new} episode{'s' * (new != 1)} x {args.frames} frames to {out} "
