@@ -2,7 +2,7 @@
 
 :func:`render_episode` is the unit of work that ``camtask render`` spreads over Dask
 workers: it renders the walk of episode ``index``, writes every file of the episode into
-a temporary folder ``DIR/.episode_NNNN.<random>.tmp``, computes the sha256 of each file
+a temporary folder ``DIR/.episode_NNNN.<random>.tmp``, computes the checksum (BLAKE3) of each file
 and renames the folder to ``DIR/episode_NNNN`` only when everything is written. Its
 random streams come from ``np.random.SeedSequence(seed, spawn_key=(index,))`` (the
 ``index``-th child of ``SeedSequence(seed).spawn``), never from the worker, so the bytes do
@@ -16,7 +16,6 @@ The layout is in docs/dataset.md.
 from __future__ import annotations
 
 import csv
-import hashlib
 import io
 import json
 import os
@@ -31,6 +30,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from testbed.checksum import ALGORITHM, file_digest
 from testbed.dataset import frame_name, write_calibration, write_png
 
 #: Formats of the RGB frames: PNG per frame, or one lossless FFV1 video per camera.
@@ -99,26 +99,19 @@ def _renderer(config: EpisodeConfig, scene):
     return _RENDERERS[key]
 
 
-def sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def checksums(root: Path, known: dict[str, str] | None = None) -> dict[str, str]:
-    """sha256 of every file under ``root``, keyed by the POSIX path relative to it, sorted.
+def checksums(root: Path, known: dict[str, str] | None = None, algorithm: str = ALGORITHM) -> dict[str, str]:
+    """Checksum of every file under ``root``, keyed by the POSIX path relative to it, sorted.
 
     known : digests already computed while writing (relative path -> hex); those files
         are not read again
+    algorithm : see :mod:`testbed.checksum`
     """
     known = known or {}
     out = {}
     for p in sorted(root.rglob("*")):
         if p.is_file():
             rel = p.relative_to(root).as_posix()
-            out[rel] = known[rel] if rel in known else sha256_file(p)
+            out[rel] = known[rel] if rel in known else file_digest(p, algorithm)
     return out
 
 
@@ -251,7 +244,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
 
     name = episode_name(index)
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out))
-    digests: dict[str, str] = {}  # sha256 of the images, computed from the bytes written
+    digests: dict[str, str] = {}  # checksums of the images, computed from the bytes written
     try:
         for sub in ("calibration", "background"):
             (tmp / sub).mkdir()

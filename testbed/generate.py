@@ -3,7 +3,8 @@
 ::
 
     DIR/manifest.json          every finished episode: index, name, seed, spawn key, frames,
-                               sha256 of each of its files; and the run's arguments
+                               checksum of each of its files (``checksum``: BLAKE3); and
+                               the run's arguments
     DIR/run_info.json          wall-clock times, host names, worker count, package versions
                                (the only file that differs between identical runs)
     DIR/episode_NNNN/          one episode (testbed.episodes, docs/dataset.md)
@@ -27,12 +28,14 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from testbed.checksum import ALGORITHM, ALGORITHMS
 from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode
 from testbed.parallel import default_workers
 
 MANIFEST = "manifest.json"
 RUN_INFO = "run_info.json"
-FORMAT_VERSION = 1
+#: 2: BLAKE3 checksums named by ``checksum``; 1: sha256, no ``checksum`` key (still resumable).
+FORMAT_VERSION = 2
 
 
 def write_json_atomic(path: Path, data: dict) -> None:
@@ -52,14 +55,22 @@ def read_manifest(out: Path) -> dict | None:
 
 
 def manifest(config: EpisodeConfig, episodes: int, entries: dict[int, dict]) -> dict:
-    return {"format_version": FORMAT_VERSION, "episodes_planned": episodes, "config": config.to_dict(),
-            "episodes": [entries[i] for i in sorted(entries)]}
+    return {"format_version": FORMAT_VERSION, "checksum": ALGORITHM, "episodes_planned": episodes,
+            "config": config.to_dict(), "episodes": [entries[i] for i in sorted(entries)]}
 
 
-def verify_episode(out: Path, entry: dict) -> bool:
-    """True when ``out/entry['name']`` holds exactly the files listed, with their sha256."""
+def manifest_algorithm(m: dict) -> str:
+    """The checksum algorithm of a manifest read from disk (sha256 before format 2)."""
+    algorithm = m.get("checksum", "sha256")
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"--resume: the manifest's checksum is {algorithm!r}; expected one of {', '.join(ALGORITHMS)}")
+    return algorithm
+
+
+def verify_episode(out: Path, entry: dict, algorithm: str = ALGORITHM) -> bool:
+    """True when ``out/entry['name']`` holds exactly the files listed, with their checksums."""
     folder = Path(out) / entry["name"]
-    return folder.is_dir() and checksums(folder) == entry["files"]
+    return folder.is_dir() and checksums(folder, algorithm=algorithm) == entry["files"]
 
 
 def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
@@ -141,8 +152,11 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
             if old.get("config") != config.to_dict() or old.get("episodes_planned") != episodes:
                 raise ValueError(f"--resume: {out / MANIFEST} was written with other arguments "
                                  f"({_diff(old, config, episodes)}); use --overwrite to start again")
+            algorithm = manifest_algorithm(old)
             for entry in old.get("episodes", []):
-                if verify_episode(out, entry):
+                if verify_episode(out, entry, algorithm):
+                    if algorithm != ALGORITHM:          # an older manifest: its episodes' checksums renewed
+                        entry = entry | {"files": checksums(out / entry["name"])}
                     keep[int(entry["index"])] = entry
         remove_unlisted(out, keep)
     write_json_atomic(out / MANIFEST, manifest(config, episodes, keep))
@@ -178,7 +192,7 @@ def versions() -> dict:
 
     out = {"python": platform.python_version()}
     for dist in ("numpy", "opencv-python-headless", "pyrender2", "PyOpenGL", "shapely", "dask", "distributed",
-                 "imageio-ffmpeg", "camtask"):
+                 "imageio-ffmpeg", "fpng", "isal", "blake3", "camtask"):
         try:
             out[dist] = metadata.version(dist)
         except metadata.PackageNotFoundError:

@@ -5,6 +5,7 @@ import hashlib
 import json
 import shutil
 
+import blake3
 import numpy as np
 import pytest
 import shapely
@@ -33,13 +34,14 @@ def test_layout_and_manifest(dataset, lab):
     m = json.loads((dataset / "manifest.json").read_text())
     assert [e["name"] for e in m["episodes"]] == ["episode_0000", "episode_0001"]
     assert m["config"]["seed"] == 4 and m["config"]["frames"] == 2 and m["episodes_planned"] == 2
+    assert m["format_version"] == 2 and m["checksum"] == "blake3"
     for e in m["episodes"]:
         ep = dataset / e["name"]
         assert e["frames"] == 2 and e["spawn_key"] == [e["index"]] and e["seed"] == 4
         on_disk = sorted(p.relative_to(ep).as_posix() for p in ep.rglob("*") if p.is_file())
         assert on_disk == sorted(e["files"])
         for rel, digest in e["files"].items():
-            assert hashlib.sha256((ep / rel).read_bytes()).hexdigest() == digest
+            assert blake3.blake3((ep / rel).read_bytes()).hexdigest() == digest
         for sub in ("frames", "masks", "silhouettes"):
             assert sorted(p.name for p in (ep / sub / "cam07").iterdir()) == ["000000.png", "000001.png"]
         assert {"calibration/cam11.yaml", "background/cam02.png", "people.csv", "meta.json", "scanlines.npz",
@@ -220,6 +222,26 @@ def test_resume_redoes_only_unfinished_episodes(dataset, tmp_path):
     # other arguments are refused
     assert main(["render", "lab", "--episodes", "2", "--frames", "3", "--seed", "4", "--cameras", "2,7,11",
                  "--out", str(out), "--workers", "0", "--resume"]) == 2
+
+
+def test_resume_keeps_the_episodes_of_a_sha256_manifest(dataset, tmp_path):
+    """A manifest of format 1 (sha256, no ``checksum`` key): its intact episodes are kept, their checksums renewed."""
+    out = tmp_path / "old"
+    shutil.copytree(dataset, out)
+    m = json.loads((out / "manifest.json").read_text())
+    old = {k: v for k, v in m.items() if k != "checksum"} | {"format_version": 1}
+    for e in old["episodes"]:
+        e["files"] = {rel: hashlib.sha256((out / e["name"] / rel).read_bytes()).hexdigest() for rel in e["files"]}
+    (out / "manifest.json").write_text(json.dumps(old))
+    kept = out / "episode_0000" / "frames" / "cam02" / "000000.png"
+    before = kept.stat().st_mtime_ns
+    (out / "episode_0001" / "people.csv").write_text("garbage")    # caught by its sha256
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 0
+    assert kept.stat().st_mtime_ns == before                       # episode 0 kept, not redone
+    assert files_of(out) == files_of(dataset)                      # episode 1 redone; manifest of format 2
+    old["checksum"] = "md5"
+    (out / "manifest.json").write_text(json.dumps(old))
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 2
 
 
 def test_video_format_is_lossless(dataset, tmp_path):

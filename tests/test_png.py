@@ -1,7 +1,7 @@
 """The dataset PNG writer: standard PNGs that OpenCV decodes to the same pixels."""
 
-import hashlib
 
+import blake3
 import cv2
 import numpy as np
 import pytest
@@ -29,10 +29,10 @@ def test_round_trip_through_opencv(h, w, kind, seed):
     assert np.array_equal(back, img)
 
 
-def test_write_returns_the_files_sha256_and_bytes_repeat(tmp_path):
+def test_write_returns_the_files_blake3_and_bytes_repeat(tmp_path):
     img = np.random.default_rng(1).integers(0, 256, (48, 64, 3), dtype=np.uint8)
     digest = write_png(tmp_path / "a.png", img)
-    assert digest == hashlib.sha256((tmp_path / "a.png").read_bytes()).hexdigest()
+    assert digest == blake3.blake3((tmp_path / "a.png").read_bytes()).hexdigest()
     assert encode_png(img) == encode_png(img.copy())
 
 
