@@ -16,6 +16,7 @@ import sys
 COMMANDS = (
     "testbed.commands.render",
     "testbed.commands.export",
+    "testbed.commands.verify",
     "testbed.commands.study",
     "testbed.commands.scanlines",
     "testbed.commands.tune",

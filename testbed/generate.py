@@ -51,7 +51,7 @@ def read_manifest(out: Path) -> dict | None:
     try:
         return json.loads(path.read_text())
     except (OSError, ValueError) as exc:
-        raise ValueError(f"--resume: cannot read {path} ({exc})") from None
+        raise ValueError(f"cannot read {path} ({exc})") from None
 
 
 def manifest(config: EpisodeConfig, episodes: int, entries: dict[int, dict]) -> dict:
@@ -63,14 +63,29 @@ def manifest_algorithm(m: dict) -> str:
     """The checksum algorithm of a manifest read from disk (sha256 before format 2)."""
     algorithm = m.get("checksum", "sha256")
     if algorithm not in ALGORITHMS:
-        raise ValueError(f"--resume: the manifest's checksum is {algorithm!r}; expected one of {', '.join(ALGORITHMS)}")
+        raise ValueError(f"manifest: checksum {algorithm!r}; expected one of {', '.join(ALGORITHMS)}")
     return algorithm
+
+
+def episode_problems(out: Path, entry: dict, algorithm: str = ALGORITHM) -> dict[str, list[str]]:
+    """What differs between ``out/entry['name']`` and its manifest entry.
+
+    Returns {"missing": listed files not on disk, "changed": files whose checksum differs,
+    "extra": files on disk not listed}, each a sorted list of paths relative to the
+    episode folder; all empty when the episode is intact. A missing folder has every
+    listed file missing.
+    """
+    folder = Path(out) / entry["name"]
+    listed = entry["files"]
+    found = checksums(folder, algorithm=algorithm) if folder.is_dir() else {}
+    return {"missing": sorted(set(listed) - set(found)),
+            "changed": sorted(k for k in found if k in listed and found[k] != listed[k]),
+            "extra": sorted(set(found) - set(listed))}
 
 
 def verify_episode(out: Path, entry: dict, algorithm: str = ALGORITHM) -> bool:
     """True when ``out/entry['name']`` holds exactly the files listed, with their checksums."""
-    folder = Path(out) / entry["name"]
-    return folder.is_dir() and checksums(folder, algorithm=algorithm) == entry["files"]
+    return not any(episode_problems(out, entry, algorithm).values())
 
 
 def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:

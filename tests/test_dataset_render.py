@@ -244,6 +244,27 @@ def test_resume_keeps_the_episodes_of_a_sha256_manifest(dataset, tmp_path):
     assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 2
 
 
+def test_verify_names_what_differs_from_the_manifest(dataset, tmp_path, capsys):
+    out = tmp_path / "copy"
+    shutil.copytree(dataset, out)
+    assert main(["verify", str(out)]) == 0
+    assert "2 episodes intact" in capsys.readouterr().out
+    ep = out / "episode_0001"
+    (ep / "people.csv").write_text("garbage")
+    (ep / "masks" / "cam07" / "000001.png").unlink()
+    (ep / "notes.txt").write_text("mine")
+    shutil.copytree(ep / "calibration", out / ".episode_0002.abcd.tmp")
+    assert main(["verify", str(out)]) == 1
+    text = capsys.readouterr().out
+    assert ("episode_0001: 1 missing (masks/cam07/000001.png); 1 changed (people.csv); 1 extra (notes.txt)"
+            in text)
+    assert not any(line.startswith("episode_0000") for line in text.splitlines())   # intact: not named
+    assert ".episode_0002.abcd.tmp" in text and "1 of 2 episodes differ" in text
+    (out / "manifest.json").unlink()
+    assert main(["verify", str(out)]) == 2
+    assert "no manifest.json" in capsys.readouterr().err
+
+
 def test_video_format_is_lossless(dataset, tmp_path):
     import cv2
 

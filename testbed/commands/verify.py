@@ -1,0 +1,72 @@
+"""``camtask verify DIR``: check a dataset's files against its manifest.
+
+Every episode that ``DIR/manifest.json`` lists is read back and each file's checksum
+compared with the manifest's (BLAKE3; sha256 for manifests of format 1). One line names
+each episode with a problem: files changed, missing, or present but not listed. Episode
+or temporary folders the manifest does not list (a run stopped before it listed them)
+and episodes planned but not yet rendered are reported without failing.
+
+Exit code 0 when every listed episode is intact, 1 when one is not, 2 when DIR has no
+readable manifest.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser("verify", help="check a dataset's files against its manifest.json",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("dir", metavar="DIR", help="dataset folder written by `camtask render`")
+    p.set_defaults(func=run)
+
+
+def names(paths: list[str], most: int = 3) -> str:
+    """``a, b, c`` or ``a, b, c and 4 more``.
+
+    >>> names(["a", "b"]), names(list("abcde"))
+    ('a, b', 'a, b, c and 2 more')
+    """
+    shown = ", ".join(paths[:most])
+    return shown if len(paths) <= most else f"{shown} and {len(paths) - most} more"
+
+
+def run(args) -> int:
+    from tqdm import tqdm
+
+    from testbed.episodes import episode_name
+    from testbed.generate import MANIFEST, episode_problems, manifest_algorithm, read_manifest
+
+    root = Path(args.dir)
+    m = read_manifest(root)
+    if m is None:
+        raise FileNotFoundError(f"DIR: no {MANIFEST} in {root} (expected a folder written by `camtask render`)")
+    algorithm = manifest_algorithm(m)
+    entries = m.get("episodes", [])
+    bad = []
+    with tqdm(total=sum(len(e["files"]) for e in entries), desc="verify", unit="file", file=sys.stderr,
+              dynamic_ncols=True) as bar:
+        for entry in entries:
+            problems = episode_problems(root, entry, algorithm)
+            if any(problems.values()):
+                bad.append(entry["name"])
+                text = "; ".join(f"{len(v)} {k} ({names(v)})" for k, v in problems.items() if v)
+                tqdm.write(f"{entry['name']}: {text}", file=sys.stdout)
+            bar.update(len(entry["files"]))
+    listed = {episode_name(int(e["index"])) for e in entries}
+    unlisted = sorted(p.name for p in root.iterdir() if p.name not in listed and (
+        p.name.startswith("episode_") or (p.name.startswith(".episode_") and p.name.endswith(".tmp"))))
+    if unlisted:
+        print(f"not listed (left by a stopped run; `camtask render ... --resume` removes them): {names(unlisted)}")
+    planned = int(m.get("episodes_planned", len(entries)))
+    if len(entries) < planned:
+        print(f"{len(entries)} of {planned} planned episodes listed: an unfinished run (`--resume` finishes it)")
+    files = sum(len(e["files"]) for e in entries)
+    if bad:
+        print(f"{root}: {len(bad)} of {len(entries)} episodes differ from {MANIFEST} ({names(bad)})")
+        return 1
+    print(f"{root}: {len(entries)} episode{'' if len(entries) == 1 else 's'} intact ({files} files, {algorithm})")
+    return 0
