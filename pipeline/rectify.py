@@ -98,13 +98,19 @@ def rectify_maps(camera: Camera, K_virtual: np.ndarray, size: tuple[int, int]) -
 
 @dataclass(frozen=True, eq=False)
 class Rectifier:
-    """Precomputed rectification of a rig: one remap call for all cameras.
+    """Precomputed rectification of a rig: nearest-neighbour remaps with integer maps.
 
     Input masks are stacked as (n_cams * row_stride, W) uint8 with camera i's rows at
     ``i * row_stride``; output (n_cams, out_height, width) uint8.
 
     K_virtual : (n_cams, 3, 3) float; bearings : (n_cams, width) float, radians, world frame
     maps_x, maps_y : (n_cams, out_height, width) float32 per-camera maps (for references)
+    fixed_map : (n_cams, out_height, width, 2) int16, source (column, row) of every output
+        pixel in its camera's raw image, (-1, -1) where it falls outside (:func:`nearest_map`)
+    height : raw image rows per camera (<= row_stride)
+    column_x : (n_cams, 2, width) int32, min and max source column over each output column
+    row_y : (n_cams, 2, out_height) int32, min and max source row (0..height-1) over each
+        output row (empty columns and rows: min > max)
     """
 
     width: int
@@ -115,6 +121,9 @@ class Rectifier:
     maps_x: np.ndarray
     maps_y: np.ndarray
     fixed_map: np.ndarray
+    height: int
+    column_x: np.ndarray
+    row_y: np.ndarray
 
     @classmethod
     def build(cls, cameras, row_stride: int | None = None, width: int | None = None) -> Rectifier:
@@ -128,28 +137,44 @@ class Rectifier:
         row_stride = h if row_stride is None else int(row_stride)
         Ks, heights = zip(*(virtual_camera_matrix(c, width) for c in cameras))
         out_h = max(heights)
-        mx, my, stacked_y = [], [], []
-        for i, (cam, K) in enumerate(zip(cameras, Ks)):
+        mx, my, fixed = [], [], []
+        for cam, K in zip(cameras, Ks):
             x, y = rectify_maps(cam, K, (width, out_h))
             mx.append(x); my.append(y)
-            outside = (np.rint(x) < 0) | (np.rint(x) > w - 1) | (np.rint(y) < 0) | (np.rint(y) > h - 1)
-            ys = y + i * row_stride
-            ys[outside] = -10.0
-            xs = x.copy(); xs[outside] = -10.0
-            stacked_y.append((xs, ys))
-        big_x = np.concatenate([s[0] for s in stacked_y])
-        big_y = np.concatenate([s[1] for s in stacked_y])
-        fixed, _ = cv2.convertMaps(big_x, big_y, cv2.CV_16SC2, nninterpolation=True)
+            fixed.append(nearest_map(x, y, (w, h)))
+        fixed = np.stack(fixed)
+        column_x, row_y = _envelopes(fixed)
         bearings = np.stack([column_bearings(c, K, width) for c, K in zip(cameras, Ks)])
         ro = lambda a: (a.setflags(write=False), a)[1]
         return cls(width, out_h, row_stride, ro(np.stack(Ks)), ro(bearings), ro(np.stack(mx)),
-                   ro(np.stack(my)), fixed)
+                   ro(np.stack(my)), ro(fixed), h, ro(column_x), ro(row_y))
 
     def remap_stacked(self, stacked: np.ndarray) -> np.ndarray:
-        """Remap stacked masks (n_cams * row_stride, W) uint8 -> (n_cams, out_height, width) uint8."""
-        out = cv2.remap(stacked, self.fixed_map, None, cv2.INTER_NEAREST,
-                        borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-        return out.reshape(-1, self.out_height, self.width)
+        """Remap stacked masks (n_cams * row_stride, W) uint8 -> (n_cams, out_height, width) uint8.
+
+        Camera i's output is ``cv2.remap`` of its own ``height`` rows with its maps
+        (``INTER_NEAREST``, zero outside the raw image), as :class:`pipeline.reference`
+        remaps it, bit for bit (tests). Only the output rectangle that can see the
+        camera's non-zero pixels is remapped: the output columns whose source columns meet
+        the bounding box of those pixels, times the rows whose source rows do
+        (``column_x``, ``row_y``); every other output pixel reads a zero or falls outside
+        the raw image. Lab, 3 people: 5.9 -> 3.1 ms for 16 cameras.
+        """
+        n, ho, w = self.n_cams, self.out_height, self.width
+        src = stacked.reshape(n, self.row_stride, -1)
+        out = np.zeros((n, ho, w), np.uint8)
+        for i in range(n):
+            image = src[i, :self.height]
+            x, y, bw, bh = cv2.boundingRect(image)            # of the non-zero pixels; 0 x 0 if none
+            if bw == 0:
+                continue
+            cols = np.flatnonzero((self.column_x[i, 1] >= x) & (self.column_x[i, 0] < x + bw))
+            rows = np.flatnonzero((self.row_y[i, 1] >= y) & (self.row_y[i, 0] < y + bh))
+            if cols.size and rows.size:
+                r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+                cv2.remap(image, self.fixed_map[i, r0:r1, c0:c1], None, cv2.INTER_NEAREST,
+                          dst=out[i, r0:r1, c0:c1], borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        return out
 
     def rectify(self, masks) -> np.ndarray:
         """Rectify masks (n_cams, H, W) bool/uint8 -> (n_cams, out_height, width) bool."""
@@ -164,3 +189,31 @@ class Rectifier:
     @property
     def n_cams(self) -> int:
         return self.bearings.shape[0]
+
+
+def nearest_map(x: np.ndarray, y: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """Integer map (out_h, out_w, 2) int16 of the source pixel nearest each float map entry.
+
+    x, y : (out_h, out_w) float32 source column and row; size = (w, h) of the source.
+    Rounded half to even, as ``cv2.remap`` rounds float maps for ``INTER_NEAREST``;
+    (-1, -1) where the rounded pixel is outside the source (or not finite).
+    """
+    w, h = size
+    xi, yi = np.rint(x), np.rint(y)
+    inside = (xi >= 0) & (xi <= w - 1) & (yi >= 0) & (yi <= h - 1)
+    return np.where(inside[..., None], np.stack([xi, yi], -1), -1).astype(np.int16)
+
+
+def _envelopes(fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Source column range of every output column and source row range of every output row.
+
+    fixed : (n_cams, out_height, width, 2) int16 maps of :func:`nearest_map`, -1 outside
+    Returns column_x (n_cams, 2, width) and row_y (n_cams, 2, out_height) int32: min, max
+    over the output pixels inside the raw image; min > max where there are none.
+    """
+    x, y = fixed[..., 0].astype(np.int32), fixed[..., 1].astype(np.int32)
+    inside = x >= 0
+    big = np.int32(1 << 30)
+    lo_x, hi_x = np.where(inside, x, big).min(axis=1), np.where(inside, x, -big).max(axis=1)
+    lo_y, hi_y = np.where(inside, y, big).min(axis=2), np.where(inside, y, -big).max(axis=2)
+    return np.stack([lo_x, hi_x], 1), np.stack([lo_y, hi_y], 1)

@@ -96,6 +96,53 @@ def test_square_gives_its_columns_without_distortion():
     assert np.flatnonzero(pipe.process(fr)[0]).tolist() == list(range(20, 28))
 
 
+_LAB_RECT = {}
+
+
+def lab_rectifier(row_stride):
+    from pipeline import Rectifier
+
+    if row_stride not in _LAB_RECT:
+        _LAB_RECT[row_stride] = Rectifier.build(LAB[:4], row_stride=row_stride)
+    return _LAB_RECT[row_stride]
+
+
+def float_map_remap(rect, stacked):
+    """Each camera's own rows remapped with its float maps, as the reference pipeline does."""
+    src = stacked.reshape(rect.n_cams, rect.row_stride, -1)[:, :rect.height]
+    return np.stack([cv2.remap(src[i], rect.maps_x[i], rect.maps_y[i], cv2.INTER_NEAREST,
+                               borderMode=cv2.BORDER_CONSTANT, borderValue=0) for i in range(rect.n_cams)])
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.sampled_from([480, 483, 500]),
+       st.lists(st.tuples(st.integers(0, 3), st.integers(0, 479), st.integers(0, 639), st.integers(1, 200),
+                          st.integers(1, 300), st.sampled_from([1, 128, 255])), max_size=6),
+       st.booleans())
+def test_remap_of_the_non_zero_box_is_each_cameras_own_remap(row_stride, blobs, junk_between):
+    """Remapping only what a camera's non-zero pixels can reach gives its whole-image remap with
+    its float maps; the rows between cameras (and the other cameras) are never read."""
+    rect = lab_rectifier(row_stride)
+    stacked = np.zeros((4, row_stride, 640), np.uint8)
+    for cam, y, x, h, w, value in blobs:
+        stacked[cam, y:y + h, x:x + w] = value
+    if junk_between:
+        stacked[:, 480:] = 7
+    flat = stacked.reshape(-1, 640)
+    np.testing.assert_array_equal(rect.remap_stacked(flat), float_map_remap(rect, flat))
+
+
+def test_remap_of_empty_full_and_noise_masks():
+    rect = lab_rectifier(480)
+    empty = np.zeros((4 * 480, 640), np.uint8)
+    assert not rect.remap_stacked(empty).any()
+    full = np.full_like(empty, 255)
+    np.testing.assert_array_equal(rect.remap_stacked(full), float_map_remap(rect, full))
+    assert 0.9 < rect.remap_stacked(full).mean() / 255 < 1.0     # a few output pixels fall outside the image
+    noise = np.random.default_rng(3).integers(0, 256, empty.shape, dtype=np.uint8)
+    np.testing.assert_array_equal(rect.remap_stacked(noise), float_map_remap(rect, noise))
+
+
 @pytest.mark.parametrize("index", [0, 4, 9, 15])
 def test_bearing_of_projected_world_point(index):
     cam = LAB[index]
