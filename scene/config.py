@@ -1,7 +1,8 @@
 """Scenes from YAML: the room, its cameras, the people and the render settings.
 
 A scene file is parsed once with PyYAML's safe loader (its libyaml binding when present:
-5 -> 0.7 ms for the 16-camera lab) into a frozen, validated :class:`Scene`. Every error is one line naming the field and what was expected.
+5 -> 0.7 ms for the 16-camera lab) into a frozen, validated :class:`Scene`. Every error
+is one line naming the field and what was expected.
 """
 
 from __future__ import annotations

@@ -178,21 +178,25 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     return keep
 
 
+def unlisted(out: Path, entries: dict[int, dict]) -> list[Path]:
+    """The episode folders of ``out`` not in ``entries`` and the temporary folders of unfinished
+    episodes, sorted by name."""
+    wanted = {episode_name(i) for i in entries}
+    return sorted((p for p in Path(out).iterdir() if p.name not in wanted and (
+        p.name.startswith("episode_") or (p.name.startswith(".episode_") and p.name.endswith(".tmp")))),
+        key=lambda p: p.name)
+
+
 def remove_unlisted(out: Path, entries: dict[int, dict] | None = None) -> None:
-    """Delete the episode folders of ``out`` not in ``entries`` (default: the manifest's) and
-    the temporary folders of unfinished episodes.
+    """Delete :func:`unlisted` folders, against ``entries`` (default: the manifest's).
 
     Only when nothing writes to ``out`` any more: after a run, once its workers have stopped.
     """
     if entries is None:
         m = read_manifest(out)
         entries = {int(e["index"]): e for e in (m or {}).get("episodes", [])}
-    wanted = {episode_name(i) for i in entries}
-    for p in Path(out).iterdir():
-        if p.name in wanted:
-            continue
-        if p.name.startswith("episode_") or (p.name.startswith(".episode_") and p.name.endswith(".tmp")):
-            shutil.rmtree(p, ignore_errors=True)
+    for p in unlisted(out, entries):
+        shutil.rmtree(p, ignore_errors=True)
 
 
 def _diff(old: dict, config: EpisodeConfig, episodes: int) -> str:

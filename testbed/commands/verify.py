@@ -37,34 +37,36 @@ def names(paths: list[str], most: int = 3) -> str:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from testbed.episodes import episode_name
-    from testbed.generate import MANIFEST, episode_problems, manifest_algorithm, read_manifest
+    from testbed.generate import (
+        MANIFEST,
+        episode_problems,
+        manifest_algorithm,
+        read_manifest,
+        unlisted,
+    )
 
     root = Path(args.dir)
     m = read_manifest(root)
     if m is None:
         raise FileNotFoundError(f"DIR: no {MANIFEST} in {root} (expected a folder written by `camtask render`)")
     algorithm = manifest_algorithm(m)
-    entries = m.get("episodes", [])
+    entries = {int(e["index"]): e for e in m.get("episodes", [])}
+    files = sum(len(e["files"]) for e in entries.values())
     bad = []
-    with tqdm(total=sum(len(e["files"]) for e in entries), desc="verify", unit="file", file=sys.stderr,
-              dynamic_ncols=True) as bar:
-        for entry in entries:
+    with tqdm(total=files, desc="verify", unit="file", file=sys.stderr, dynamic_ncols=True) as bar:
+        for entry in entries.values():
             problems = episode_problems(root, entry, algorithm)
             if any(problems.values()):
                 bad.append(entry["name"])
                 text = "; ".join(f"{len(v)} {k} ({names(v)})" for k, v in problems.items() if v)
                 tqdm.write(f"{entry['name']}: {text}", file=sys.stdout)
             bar.update(len(entry["files"]))
-    listed = {episode_name(int(e["index"])) for e in entries}
-    unlisted = sorted(p.name for p in root.iterdir() if p.name not in listed and (
-        p.name.startswith("episode_") or (p.name.startswith(".episode_") and p.name.endswith(".tmp"))))
-    if unlisted:
-        print(f"not listed (left by a stopped run; `camtask render ... --resume` removes them): {names(unlisted)}")
+    left = [p.name for p in unlisted(root, entries)]
+    if left:
+        print(f"not listed (left by a stopped run; `camtask render ... --resume` removes them): {names(left)}")
     planned = int(m.get("episodes_planned", len(entries)))
     if len(entries) < planned:
         print(f"{len(entries)} of {planned} planned episodes listed: an unfinished run (`--resume` finishes it)")
-    files = sum(len(e["files"]) for e in entries)
     if bad:
         print(f"{root}: {len(bad)} of {len(entries)} episodes differ from {MANIFEST} ({names(bad)})")
         return 1
