@@ -193,10 +193,18 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
 
 
 def hull_record(frame: int, hull) -> dict:
-    """One frame's hull as JSON: area (m^2) and polygons (exterior + holes, metres, 1e-6 m)."""
+    """One frame's hull as JSON: area (m^2) and polygons (exterior + holes, metres, 1e-6 m).
+
+    The polygons are in GEOS's normal form (``shapely.normalize``: parts and rings in a
+    fixed order, each ring from a fixed vertex), so the bytes depend on the region, not on
+    the order in which the overlays built it.
+    """
+    import shapely
+    from shapely.geometry import MultiPolygon
+
     from tasking.hull import prune_small
 
-    polys = prune_small(hull, 0.0)
+    polys = list(shapely.normalize(MultiPolygon(prune_small(hull, 0.0))).geoms)
     ring = lambda r: [[round(x, 6), round(y, 6)] for x, y in r.coords]
     return {"frame": frame, "area": round(float(sum(p.area for p in polys)), 9),
             "polygons": [{"exterior": ring(p.exterior), "holes": [ring(h) for h in p.interiors]}

@@ -12,6 +12,8 @@ from tasking import (
     camera_regions_from_discs,
     camera_regions_from_scanlines,
     empty_regions_from_discs,
+    free_wedges_from_discs,
+    hull_from_wedges,
     polygon_centres,
     prune_small,
     visual_hull_of_discs,
@@ -146,6 +148,38 @@ def test_hull_contains_every_object_and_is_at_least_their_area(scene):
     objects = object_union(centres, room)
     assert objects.difference(hull).area < 1e-9
     assert hull.area >= objects.area - 1e-9
+
+
+@settings(max_examples=40, deadline=None)
+@given(scenes)
+def test_room_minus_each_wedge_set_is_the_room_minus_their_union(scene):
+    """The two orders of hull_from_wedges (few cameras / many) give one region."""
+    from tasking import hull as hull_module
+
+    room, xy, yaw, fov, centres = build(scene)
+    wedges = free_wedges_from_discs(xy, yaw, fov, centres, R, room)
+    one_by_one = hull_from_wedges(wedges, room)
+    limit = hull_module.SEQUENTIAL_MAX
+    try:
+        hull_module.SEQUENTIAL_MAX = 0
+        united = hull_from_wedges(wedges, room)
+    finally:
+        hull_module.SEQUENTIAL_MAX = limit
+    assert sym_diff_area(one_by_one, united) < 1e-12 * room.area
+    assert abs(one_by_one.area - united.area) < 1e-12 * room.area
+
+
+def test_dataset_hull_record_does_not_depend_on_the_overlay_order():
+    """gt_hull.json holds polygons in normal form: rings that start elsewhere give the same record."""
+    from testbed.episodes import hull_record
+
+    square = Polygon([(0, 0), (2, 0), (2, 2), (0, 2)], [[(0.5, 0.5), (1, 0.5), (1, 1), (0.5, 1)]])
+    turned = Polygon([(2, 2), (0, 2), (0, 0), (2, 0)], [[(1, 1), (0.5, 1), (0.5, 0.5), (1, 0.5)]])
+    far = box(5, 5, 6, 6)
+    assert hull_record(3, shapely.union_all([square, far])) == hull_record(3, shapely.MultiPolygon([far, turned]))
+    rec = hull_record(3, square)
+    assert rec["area"] == 3.75 and len(rec["polygons"]) == 1 and len(rec["polygons"][0]["holes"]) == 1
+    assert hull_record(0, Polygon())["polygons"] == []
 
 
 @settings(max_examples=30, deadline=None)
