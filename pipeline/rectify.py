@@ -100,14 +100,16 @@ def rectify_maps(camera: Camera, K_virtual: np.ndarray, size: tuple[int, int]) -
 class Rectifier:
     """Precomputed rectification of a rig: nearest-neighbour remaps with integer maps.
 
-    Input masks are stacked as (n_cams * row_stride, W) uint8 with camera i's rows at
-    ``i * row_stride``; output (n_cams, out_height, width) uint8.
+    Input masks are (n_cams, rows, W) uint8, or stacked as (n_cams * rows, W) with camera
+    i's rows at ``i * rows`` (rows >= height: any rows past ``height`` are never read);
+    output (n_cams, out_height, width) uint8. The maps do not depend on ``rows``, so one
+    rectifier serves every stacking (every opening kernel).
 
     K_virtual : (n_cams, 3, 3) float; bearings : (n_cams, width) float, radians, world frame
     maps_x, maps_y : (n_cams, out_height, width) float32 per-camera maps (for references)
     fixed_map : (n_cams, out_height, width, 2) int16, source (column, row) of every output
         pixel in its camera's raw image, (-1, -1) where it falls outside (:func:`nearest_map`)
-    height : raw image rows per camera (<= row_stride)
+    height : raw image rows per camera
     column_x : (n_cams, 2, width) int32, min and max source column over each output column
     row_y : (n_cams, 2, out_height) int32, min and max source row (0..height-1) over each
         output row (empty columns and rows: min > max)
@@ -115,7 +117,6 @@ class Rectifier:
 
     width: int
     out_height: int
-    row_stride: int
     K_virtual: np.ndarray
     bearings: np.ndarray
     maps_x: np.ndarray
@@ -126,7 +127,7 @@ class Rectifier:
     row_y: np.ndarray
 
     @classmethod
-    def build(cls, cameras, row_stride: int | None = None, width: int | None = None) -> Rectifier:
+    def build(cls, cameras, width: int | None = None) -> Rectifier:
         cameras = tuple(cameras)
         if not cameras:
             raise ValueError("cameras: expected at least one calibrated camera")
@@ -134,7 +135,6 @@ class Rectifier:
         if any((c.height, c.width) != (h, w) for c in cameras):
             raise ValueError("cameras: expected every camera to have the same resolution")
         width = w if width is None else int(width)
-        row_stride = h if row_stride is None else int(row_stride)
         Ks, heights = zip(*(virtual_camera_matrix(c, width) for c in cameras))
         out_h = max(heights)
         mx, my, fixed = [], [], []
@@ -146,11 +146,11 @@ class Rectifier:
         column_x, row_y = _envelopes(fixed)
         bearings = np.stack([column_bearings(c, K, width) for c, K in zip(cameras, Ks)])
         ro = lambda a: (a.setflags(write=False), a)[1]
-        return cls(width, out_h, row_stride, ro(np.stack(Ks)), ro(bearings), ro(np.stack(mx)),
+        return cls(width, out_h, ro(np.stack(Ks)), ro(bearings), ro(np.stack(mx)),
                    ro(np.stack(my)), ro(fixed), h, ro(column_x), ro(row_y))
 
     def remap_stacked(self, stacked: np.ndarray) -> np.ndarray:
-        """Remap stacked masks (n_cams * row_stride, W) uint8 -> (n_cams, out_height, width) uint8.
+        """Remap masks (n_cams, rows, W) or (n_cams * rows, W) uint8 -> (n_cams, out_height, width) uint8.
 
         Camera i's output is ``cv2.remap`` of its own ``height`` rows with its maps
         (``INTER_NEAREST``, zero outside the raw image), as :class:`pipeline.reference`
@@ -161,7 +161,9 @@ class Rectifier:
         the raw image. Lab, 3 people: 5.9 -> 3.1 ms for 16 cameras.
         """
         n, ho, w = self.n_cams, self.out_height, self.width
-        src = stacked.reshape(n, self.row_stride, -1)
+        src = stacked.reshape(n, -1, stacked.shape[-1])
+        if src.shape[1] < self.height:
+            raise ValueError(f"masks: expected at least {self.height} rows per camera, got {src.shape[1]}")
         out = np.zeros((n, ho, w), np.uint8)
         for i in range(n):
             image = src[i, :self.height]
@@ -179,12 +181,9 @@ class Rectifier:
     def rectify(self, masks) -> np.ndarray:
         """Rectify masks (n_cams, H, W) bool/uint8 -> (n_cams, out_height, width) bool."""
         m = np.asarray(masks)
-        n, h, w = m.shape
-        if n != self.n_cams:
-            raise ValueError(f"masks: expected {self.n_cams} cameras, got {n}")
-        buf = np.zeros((n, self.row_stride, w), np.uint8)
-        buf[:, :h] = m != 0
-        return self.remap_stacked(buf.reshape(-1, w)).astype(bool)
+        if m.ndim != 3 or m.shape[0] != self.n_cams:
+            raise ValueError(f"masks: expected {self.n_cams} cameras of (H, W), got shape {m.shape}")
+        return self.remap_stacked((m != 0).view(np.uint8)).astype(bool)
 
     @property
     def n_cams(self) -> int:

@@ -15,6 +15,7 @@ import numpy as np
 from .core import Pipeline
 from .metrics import cdnet_metrics, confusion, evaluate
 from .params import PipelineParams
+from .rectify import Rectifier
 from .rle import scanline_bits
 
 
@@ -70,25 +71,13 @@ def run_sequence(pipeline: Pipeline, frames: Iterable[np.ndarray],
 
 
 def scanline_f1(cameras, background, frames, gt_scanlines, params: PipelineParams,
-                rectifier_cache: dict | None = None) -> float:
+                rectifier: Rectifier | None = None) -> float:
     """Scanline F1 of ``params`` on an in-memory sequence (for tuning).
 
     frames : (n_frames, n_cams, H, W, 3) uint8; gt_scanlines : (n_frames, n_cams, W) bool
+    rectifier : the cameras' :class:`Rectifier`, shared between calls (default: built here)
     """
-    pipe = make_pipeline(cameras, params, background, rectifier_cache)
+    pipe = Pipeline(cameras, params, background, rectifier)
     pred = np.stack([pipe.process(f) for f in frames])
     c = confusion(pred, gt_scanlines)
     return float(cdnet_metrics(**c)["f1"])
-
-
-def make_pipeline(cameras, params, background, rectifier_cache: dict | None = None) -> Pipeline:
-    """A :class:`Pipeline`, reusing rectification maps from ``rectifier_cache`` (keyed by row stride)."""
-    if rectifier_cache is None:
-        return Pipeline(cameras, params, background)
-    stride = cameras[0].height + params.opening_kernel // 2
-    pipe = Pipeline.__new__(Pipeline)
-    if stride not in rectifier_cache:
-        rectifier_cache[stride] = Pipeline(cameras, params).rectifier
-    pipe._init(cameras, params, rectifier_cache[stride])
-    pipe.set_background(background)
-    return pipe

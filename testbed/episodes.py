@@ -37,7 +37,7 @@ from testbed.dataset import frame_name, write_calibration, write_png
 FORMATS = ("png", "video")
 
 _RENDERERS: dict = {}   # (scene source, people, cameras) -> Renderer, one per process
-_RECTIFIERS: dict = {}  # (scene source, cameras) -> {row stride: Rectifier}, see pipeline.runs.make_pipeline
+_RECTIFIERS: dict = {}  # (scene source, cameras) -> Rectifier, shared by that rig's pipelines
 _PIPELINES: dict = {}  # (renderer key, parameters) -> Pipeline on that renderer's background, reset per episode
 
 
@@ -223,8 +223,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     """
     seconds = {} if seconds is None else seconds
     start = time.perf_counter()
-    from pipeline import PipelineParams
-    from pipeline.runs import make_pipeline
+    from pipeline import Pipeline, PipelineParams, Rectifier
     from tasking.hull import visual_hull_of_scanlines
     from testbed.episode import walk
 
@@ -241,8 +240,10 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     bg = renderer.background().rgb
     key = (config.scene, people.count, config.cameras, json.dumps(config.params, sort_keys=True))
     if key not in _PIPELINES:  # the background terms cost ~0.25 s for 16 cameras: once per worker
-        _PIPELINES[key] = make_pipeline(cameras, params, bg,
-                                        _RECTIFIERS.setdefault((config.scene, tuple(numbers)), {}))
+        rig = (config.scene, tuple(numbers))
+        if rig not in _RECTIFIERS:
+            _RECTIFIERS[rig] = Rectifier.build(cameras)
+        _PIPELINES[key] = Pipeline(cameras, params, bg, _RECTIFIERS[rig])
     pipe = _PIPELINES[key]
     pipe.reset()
     xy_all, _, _ = scene.floor_poses()

@@ -1,5 +1,7 @@
 """Hand-computable cases, round trips and equivalences of the pipeline steps."""
 
+import functools
+
 import cv2
 import numpy as np
 import pytest
@@ -96,20 +98,16 @@ def test_square_gives_its_columns_without_distortion():
     assert np.flatnonzero(pipe.process(fr)[0]).tolist() == list(range(20, 28))
 
 
-_LAB_RECT = {}
-
-
-def lab_rectifier(row_stride):
+@functools.cache
+def lab_rectifier():
     from pipeline import Rectifier
 
-    if row_stride not in _LAB_RECT:
-        _LAB_RECT[row_stride] = Rectifier.build(LAB[:4], row_stride=row_stride)
-    return _LAB_RECT[row_stride]
+    return Rectifier.build(LAB[:4])
 
 
 def float_map_remap(rect, stacked):
     """Each camera's own rows remapped with its float maps, as the reference pipeline does."""
-    src = stacked.reshape(rect.n_cams, rect.row_stride, -1)[:, :rect.height]
+    src = stacked.reshape(rect.n_cams, -1, stacked.shape[-1])[:, :rect.height]
     return np.stack([cv2.remap(src[i], rect.maps_x[i], rect.maps_y[i], cv2.INTER_NEAREST,
                                borderMode=cv2.BORDER_CONSTANT, borderValue=0) for i in range(rect.n_cams)])
 
@@ -119,11 +117,11 @@ def float_map_remap(rect, stacked):
        st.lists(st.tuples(st.integers(0, 3), st.integers(0, 479), st.integers(0, 639), st.integers(1, 200),
                           st.integers(1, 300), st.sampled_from([1, 128, 255])), max_size=6),
        st.booleans())
-def test_remap_of_the_non_zero_box_is_each_cameras_own_remap(row_stride, blobs, junk_between):
+def test_remap_of_the_non_zero_box_is_each_cameras_own_remap(rows, blobs, junk_between):
     """Remapping only what a camera's non-zero pixels can reach gives its whole-image remap with
     its float maps; the rows between cameras (and the other cameras) are never read."""
-    rect = lab_rectifier(row_stride)
-    stacked = np.zeros((4, row_stride, 640), np.uint8)
+    rect = lab_rectifier()
+    stacked = np.zeros((4, rows, 640), np.uint8)
     for cam, y, x, h, w, value in blobs:
         stacked[cam, y:y + h, x:x + w] = value
     if junk_between:
@@ -133,7 +131,7 @@ def test_remap_of_the_non_zero_box_is_each_cameras_own_remap(row_stride, blobs, 
 
 
 def test_remap_of_empty_full_and_noise_masks():
-    rect = lab_rectifier(480)
+    rect = lab_rectifier()
     empty = np.zeros((4 * 480, 640), np.uint8)
     assert not rect.remap_stacked(empty).any()
     full = np.full_like(empty, 255)
@@ -141,6 +139,9 @@ def test_remap_of_empty_full_and_noise_masks():
     assert 0.9 < rect.remap_stacked(full).mean() / 255 < 1.0     # a few output pixels fall outside the image
     noise = np.random.default_rng(3).integers(0, 256, empty.shape, dtype=np.uint8)
     np.testing.assert_array_equal(rect.remap_stacked(noise), float_map_remap(rect, noise))
+    np.testing.assert_array_equal(rect.remap_stacked(noise.reshape(4, 480, 640)), float_map_remap(rect, noise))
+    with pytest.raises(ValueError, match="at least 480 rows"):
+        rect.remap_stacked(noise.reshape(4, 480, 640)[:, :479])
 
 
 @pytest.mark.parametrize("index", [0, 4, 9, 15])
