@@ -162,7 +162,7 @@ class Pipeline:
     def _foreground_stacked(self, frames) -> np.ndarray:
         self._need_background()
         frames = check_frames("frames", frames, self.frame_shape)
-        self._terms.mask(frames, self._buf[:, :self.height])
+        self._terms.mask(frames, self._buf)
         stacked = self._buf.reshape(-1, self.width)
         opened = open_stacked(stacked, self.params.opening_kernel)
         return opened.copy() if opened is stacked else opened

@@ -26,8 +26,6 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-_ONES = np.ones((1, 3), np.float32)
-
 
 def check_frames(name: str, frames, shape: tuple | None = None) -> np.ndarray:
     """Return ``frames`` as a (n, H, W, 3) uint8 array, checking ``shape`` = (n, H, W) if given."""
@@ -68,39 +66,37 @@ def background_model(frames) -> np.ndarray:
 
 
 class AngleTerms:
-    """Per-pixel background terms of the colour-angle test, precomputed once.
+    """The colour-angle test of one rig's background, in one compiled pass per frame.
 
-    background : (n_cams, H, W, 3) float32
+    background : (n_cams, H, W, 3) float32; threshold_deg : degrees; brightness_floor,
+    dark_delta : RGB norms, 8-bit levels. The per-pixel terms |b|^2 and cos^2 |b|^2 are
+    taken on the fly (:mod:`pipeline.angle_kernel`): nothing is precomputed per pixel.
     """
 
     def __init__(self, background: np.ndarray, threshold_deg: float, brightness_floor: float,
                  dark_delta: float):
+        from .angle_kernel import angle_mask  # numba: imported (and compiled) on first use
+
+        self._kernel = angle_mask
         self.background = np.ascontiguousarray(background, dtype=np.float32)
-        self.bb = (self.background.astype(np.float64) ** 2).sum(-1).astype(np.float32)
         c = np.cos(np.radians(threshold_deg))
-        self.c2bb = (c * c * self.bb).astype(np.float32)
+        self.c2 = float(c * c)
         self.floor2 = np.float32(brightness_floor) ** 2
         self.delta2 = np.float32(dark_delta) ** 2
-        self.dark_bg = (self.bb < self.floor2).astype(np.uint8) * 255
-        self.cam_dark_bg = self.dark_bg.reshape(len(self.bb), -1).any(axis=1)
 
     def mask(self, frames: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """Foreground of ``frames`` (n_cams, H, W, 3) uint8 into ``out`` (n_cams, H, W) uint8 0/255."""
-        h, w = frames.shape[1:3]
-        ff = np.empty((h, w, 3), np.float32)
-        for i in range(frames.shape[0]):  # per camera: OpenCV kernels on cache-sized arrays
-            ff[...] = frames[i]
-            dot = cv2.transform(cv2.multiply(ff, self.background[i]), _ONES)
-            aa = cv2.transform(cv2.multiply(ff, ff), _ONES)
-            cv2.compare(cv2.multiply(dot, dot), cv2.multiply(aa, self.c2bb[i]), cv2.CMP_LT, dst=out[i])
-            if self.floor2 > 0:
-                dark = cv2.compare(aa, float(self.floor2), cv2.CMP_LT)
-                if self.cam_dark_bg[i]:
-                    cv2.bitwise_or(dark, self.dark_bg[i], dst=dark)
-                if cv2.countNonZero(dark):
-                    diff2 = cv2.scaleAdd(dot, -2.0, cv2.add(aa, self.bb[i]))
-                    cv2.copyTo(cv2.compare(diff2, float(self.delta2), cv2.CMP_GT), dark, out[i])
-        return out
+        """Foreground of ``frames`` (n_cams, H, W, 3) uint8 into ``out[:, :H]`` (255 or 0).
+
+        out : (n_cams, rows, W) uint8, C-contiguous, rows >= H (rows past H are left as they are)
+        """
+        n, h, w = self.background.shape[:3]
+        if frames.shape != (n, h, w, 3) or frames.dtype != np.uint8:
+            raise ValueError(f"frames: expected ({n}, {h}, {w}, 3) uint8, got {frames.shape} {frames.dtype}")
+        if (out.ndim != 3 or out.shape[0] != n or out.shape[1] < h or out.shape[2] != w
+                or out.dtype != np.uint8 or not out.flags.c_contiguous):
+            raise ValueError(f"out: expected C-contiguous ({n}, >= {h}, {w}) uint8, got {out.shape} {out.dtype}")
+        return self._kernel(np.ascontiguousarray(frames), self.background, self.c2, self.floor2,
+                            self.delta2, out)
 
 
 def colour_angle_foreground(frames, background, threshold_deg: float, brightness_floor: float,

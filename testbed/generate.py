@@ -211,7 +211,7 @@ def versions() -> dict:
 
     out = {"python": platform.python_version()}
     for dist in ("numpy", "opencv-python-headless", "pyrender2", "PyOpenGL", "shapely", "dask", "distributed",
-                 "imageio-ffmpeg", "fpng", "isal", "blake3", "camtask"):
+                 "imageio-ffmpeg", "fpng", "isal", "blake3", "numba", "camtask"):
         try:
             out[dist] = metadata.version(dist)
         except metadata.PackageNotFoundError:

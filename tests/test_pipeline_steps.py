@@ -73,6 +73,55 @@ def test_brightness_scaling_is_not_foreground_but_dark_floor_uses_difference():
     assert fg[0, 0].tolist() == [False, True]
 
 
+def angle_formula(frames, background, threshold_deg, floor, delta):
+    """The colour-angle test as the formulas of pipeline.foreground, in numpy float32."""
+    a, b = frames.astype(np.float32), background.astype(np.float32)
+    dot = a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+    aa = a[..., 0] * a[..., 0] + a[..., 1] * a[..., 1] + a[..., 2] * a[..., 2]
+    bb = b[..., 0] * b[..., 0] + b[..., 1] * b[..., 1] + b[..., 2] * b[..., 2]
+    c = np.cos(np.radians(threshold_deg))
+    c2bb = (c * c * bb.astype(np.float64)).astype(np.float32)
+    floor2, delta2 = np.float32(floor) ** 2, np.float32(delta) ** 2
+    dark = (aa < floor2) | (bb < floor2)
+    return np.where(dark, (aa + bb) - np.float32(2) * dot > delta2, dot * dot < aa * c2bb)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.floats(0.5, 30.0), st.floats(0.0, 60.0), st.floats(0.0, 80.0),
+       st.booleans(), st.integers(0, 3))
+def test_compiled_angle_test_is_the_float32_formula(seed, threshold, floor, delta, whole, extra_rows):
+    """AngleTerms' compiled pass equals the formulas term by term (any background, mean or
+    whole levels, dark patches, rows of a taller buffer left alone)."""
+    from pipeline.foreground import AngleTerms
+
+    rng = np.random.default_rng(seed)
+    n, h, w = 2, 7, 13
+    bg = rng.uniform(0, 255, (n, h, w, 3)).astype(np.float32)
+    bg[:, :2] /= 20                                        # dark background rows
+    if whole:
+        bg = np.rint(bg)
+    frames = np.clip(bg + rng.normal(0, 12, bg.shape), 0, 255).astype(np.uint8)
+    frames[:, 3:5, 4:9] = rng.integers(0, 256, (n, 2, 5, 3))    # an object
+    frames[:, -1, :4] //= 16                                   # dark frame pixels
+    out = np.full((n, h + extra_rows, w), 7, np.uint8)
+    AngleTerms(bg, threshold, floor, delta).mask(frames, out)
+    np.testing.assert_array_equal(out[:, :h], 255 * angle_formula(frames, bg, threshold, floor, delta))
+    assert (out[:, h:] == 7).all()
+
+
+def test_angle_terms_refuse_mismatched_buffers():
+    from pipeline.foreground import AngleTerms
+
+    terms = AngleTerms(np.ones((2, 4, 5, 3), np.float32), 3.0, 10.0, 20.0)
+    frames = np.zeros((2, 4, 5, 3), np.uint8)
+    with pytest.raises(ValueError, match="out: expected C-contiguous"):
+        terms.mask(frames, np.zeros((2, 3, 5), np.uint8))
+    with pytest.raises(ValueError, match="out: expected C-contiguous"):
+        terms.mask(frames, np.zeros((2, 6, 5), np.uint8)[:, :4])
+    with pytest.raises(ValueError, match="frames: expected"):
+        terms.mask(frames[:1], np.zeros((2, 4, 5), np.uint8))
+
+
 def test_opening_removes_specks_keeps_blocks_and_edges():
     m = np.zeros((2, 10, 10), bool)
     m[0, 2:6, 2:6] = True
