@@ -2,7 +2,7 @@
 
 Per pixel, in float32 exactly as the formulas of :mod:`pipeline.foreground` state them
 (no fused multiply-add, no reassociation: ``fastmath`` is off), with the background
-terms derived on the fly from the float32 background:
+terms derived on the fly from the background (float32, or uint8 levels):
 
     dot = a0 b0 + a1 b1 + a2 b2,   aa = |a|^2,   bb = |b|^2          (float32, in this order)
     c2bb = float32(cos^2(theta) * bb in float64)
@@ -23,7 +23,7 @@ import numpy as np
 
 @numba.njit(cache=True, nogil=True, boundscheck=False, error_model="numpy")
 def angle_mask(frames, background, c2, floor2, delta2, out):  # pragma: no cover - compiled
-    """frames (n, H, W, 3) uint8 and background (n, H, W, 3) float32, C-contiguous;
+    """frames (n, H, W, 3) uint8 and background (n, H, W, 3) float32 or uint8, C-contiguous;
     c2 = cos^2(theta) float64; floor2, delta2 float32; out (n, rows, W) uint8,
     C-contiguous, rows >= H: out[:, :H] <- 255 where foreground, 0 elsewhere."""
     n, h, w = frames.shape[0], frames.shape[1], frames.shape[2]
@@ -37,9 +37,9 @@ def angle_mask(frames, background, c2, floor2, delta2, out):  # pragma: no cover
             a0 = np.float32(f[3 * x])
             a1 = np.float32(f[3 * x + 1])
             a2 = np.float32(f[3 * x + 2])
-            b0 = b[3 * x]
-            b1 = b[3 * x + 1]
-            b2 = b[3 * x + 2]
+            b0 = np.float32(b[3 * x])
+            b1 = np.float32(b[3 * x + 1])
+            b2 = np.float32(b[3 * x + 2])
             dot = a0 * b0 + a1 * b1 + a2 * b2
             aa = a0 * a0 + a1 * a1 + a2 * a2
             bb = b0 * b0 + b1 * b1 + b2 * b2

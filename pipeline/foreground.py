@@ -71,6 +71,9 @@ class AngleTerms:
     background : (n_cams, H, W, 3) float32; threshold_deg : degrees; brightness_floor,
     dark_delta : RGB norms, 8-bit levels. The per-pixel terms |b|^2 and cos^2 |b|^2 are
     taken on the fly (:mod:`pipeline.angle_kernel`): nothing is precomputed per pixel.
+    A background of whole levels (one clean frame, as datasets record it) is kept as
+    uint8, a quarter of the bytes to read per frame, with the same results (the float32
+    terms of whole levels are exact).
     """
 
     def __init__(self, background: np.ndarray, threshold_deg: float, brightness_floor: float,
@@ -78,24 +81,33 @@ class AngleTerms:
         from .angle_kernel import angle_mask  # numba: imported (and compiled) on first use
 
         self._kernel = angle_mask
-        self.background = np.ascontiguousarray(background, dtype=np.float32)
+        bg = np.ascontiguousarray(background, dtype=np.float32)
+        whole = bg.min() >= 0 and bg.max() <= 255 and np.array_equal(np.rint(bg), bg)
+        self._levels = bg.astype(np.uint8) if whole else bg       # what the compiled pass reads
         c = np.cos(np.radians(threshold_deg))
         self.c2 = float(c * c)
         self.floor2 = np.float32(brightness_floor) ** 2
         self.delta2 = np.float32(dark_delta) ** 2
+
+    @property
+    def background(self) -> np.ndarray:
+        """(n_cams, H, W, 3) float32, read-only."""
+        bg = self._levels.astype(np.float32, copy=self._levels.dtype != np.float32)
+        bg.setflags(write=False)
+        return bg
 
     def mask(self, frames: np.ndarray, out: np.ndarray) -> np.ndarray:
         """Foreground of ``frames`` (n_cams, H, W, 3) uint8 into ``out[:, :H]`` (255 or 0).
 
         out : (n_cams, rows, W) uint8, C-contiguous, rows >= H (rows past H are left as they are)
         """
-        n, h, w = self.background.shape[:3]
+        n, h, w = self._levels.shape[:3]
         if frames.shape != (n, h, w, 3) or frames.dtype != np.uint8:
             raise ValueError(f"frames: expected ({n}, {h}, {w}, 3) uint8, got {frames.shape} {frames.dtype}")
         if (out.ndim != 3 or out.shape[0] != n or out.shape[1] < h or out.shape[2] != w
                 or out.dtype != np.uint8 or not out.flags.c_contiguous):
             raise ValueError(f"out: expected C-contiguous ({n}, >= {h}, {w}) uint8, got {out.shape} {out.dtype}")
-        return self._kernel(np.ascontiguousarray(frames), self.background, self.c2, self.floor2,
+        return self._kernel(np.ascontiguousarray(frames), self._levels, self.c2, self.floor2,
                             self.delta2, out)
 
 

@@ -239,7 +239,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     people = scene.people
     bg = renderer.background().rgb
     key = (config.scene, people.count, config.cameras, json.dumps(config.params, sort_keys=True))
-    if key not in _PIPELINES:  # the float32 background, 45 MB for 16 cameras: once per worker
+    if key not in _PIPELINES:  # background levels, ~15 MB for 16 cameras: once per worker
         rig = (config.scene, tuple(numbers))
         if rig not in _RECTIFIERS:
             _RECTIFIERS[rig] = Rectifier.build(cameras)

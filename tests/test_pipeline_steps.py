@@ -104,7 +104,10 @@ def test_compiled_angle_test_is_the_float32_formula(seed, threshold, floor, delt
     frames[:, 3:5, 4:9] = rng.integers(0, 256, (n, 2, 5, 3))    # an object
     frames[:, -1, :4] //= 16                                   # dark frame pixels
     out = np.full((n, h + extra_rows, w), 7, np.uint8)
-    AngleTerms(bg, threshold, floor, delta).mask(frames, out)
+    terms = AngleTerms(bg, threshold, floor, delta)
+    assert terms._levels.dtype == (np.uint8 if whole else np.float32)     # both compiled paths
+    np.testing.assert_array_equal(terms.background, bg)
+    terms.mask(frames, out)
     np.testing.assert_array_equal(out[:, :h], 255 * angle_formula(frames, bg, threshold, floor, delta))
     assert (out[:, h:] == 7).all()
 
