@@ -12,7 +12,7 @@ terms derived on the fly from the background (float32, or uint8 levels):
 The loop has no branch, so LLVM vectorises it; it reads the frame and the background
 once and writes the mask once (OpenCV needed eight passes over float32 temporaries:
 lab, 16 cameras, ~9.5 -> ~2.7 ms per frame). Compiled on first use and cached on disk
-(``cache=True``: ~0.5 s the first time on a machine, ~0.1 s per process after).
+(~0.5 s the first time on a machine, ~0.1 s per process after; see :func:`_compiled`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,18 @@ import numba
 import numpy as np
 
 
-@numba.njit(cache=True, nogil=True, boundscheck=False, error_model="numpy")
+def _compiled(fn):
+    """``numba.njit`` with the compiled code cached on disk, or without a cache where numba
+    finds no writable cache folder (next to this file, then ``NUMBA_CACHE_DIR`` or the
+    user's cache folder): compiled once per process then."""
+    options = dict(nogil=True, boundscheck=False, error_model="numpy")
+    try:
+        return numba.njit(cache=True, **options)(fn)
+    except RuntimeError:                                  # "cannot cache function ...: no locator available"
+        return numba.njit(**options)(fn)
+
+
+@_compiled
 def angle_mask(frames, background, c2, floor2, delta2, out):  # pragma: no cover - compiled
     """frames (n, H, W, 3) uint8 and background (n, H, W, 3) float32 or uint8, C-contiguous;
     c2 = cos^2(theta) float64; floor2, delta2 float32; out (n, rows, W) uint8,

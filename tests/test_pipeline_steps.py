@@ -1,6 +1,7 @@
 """Hand-computable cases, round trips and equivalences of the pipeline steps."""
 
 import functools
+import os
 
 import cv2
 import numpy as np
@@ -359,3 +360,17 @@ def test_process_with_truth_equals_process_and_ground_truth(opening):
         assert scan.dtype == gt.dtype == bool and gt.shape == (3, 640)
     with pytest.raises(ValueError, match="labels: expected shape"):
         both.process_with_truth(frames[0], labels[0][:2])
+
+
+def test_compiled_angle_test_runs_without_a_writable_cache(tmp_path):
+    """Where numba finds no cache folder, the kernel is compiled per process instead of failing at import."""
+    import subprocess
+    import sys
+
+    code = ("import numpy as np\n"
+            "from pipeline.foreground import colour_angle_foreground, background_model\n"
+            "bg = np.full((1, 4, 4, 3), 100, np.uint8); fr = bg.copy(); fr[0, 1, 2] = (200, 50, 50)\n"
+            "print(int(colour_angle_foreground(fr, background_model(bg), 5.0, 10.0, 20.0).sum()))\n")
+    env = {**os.environ, "NUMBA_CACHE_LOCATOR_CLASSES": "_IPythonCacheLocator"}   # no locator for a .py file
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "1"
