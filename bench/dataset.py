@@ -22,6 +22,10 @@ fps_inline, fps_overlap : one episode in this process, as ``camtask render`` run
 stage_ms_per_frame_1 : where the best 1-worker run's time goes (run_info.json's episode_seconds):
              render, silhouettes, write (PNG or video), pipeline (scanlines + ground
              truth), hull, finish (per-episode setup, people.csv, npz, checksums, rename)
+stage_ms_per_frame_2 : the same for the best 2-worker run, per frame of one worker (so a
+             stage that two workers slow down by sharing the machine grows here)
+busy_1, busy_2 : the time spent inside episodes, summed over the workers, over workers x
+             wall clock (what is left is the cluster's scheduling and the last episode's tail)
 Every figure is frames (of 16 cameras) per second of wall-clock time.
 """
 
@@ -68,7 +72,8 @@ def warm_up(config) -> None:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
-def generation_fps(client, config, episodes: int, workers: int, root: Path) -> float:
+def generation_fps(client, config, episodes: int, workers: int, root: Path) -> tuple[float, dict, float]:
+    """(frames per second, ms per frame of each stage summed over the workers, busy fraction)."""
     from testbed.generate import generate
 
     client.gather([client.submit(warm_up, config, workers=[w], pure=False)   # every worker once
@@ -77,13 +82,13 @@ def generation_fps(client, config, episodes: int, workers: int, root: Path) -> f
     out.mkdir(parents=True)
     t = time.perf_counter()
     generate(config, episodes, out, {}, client)
-    fps = episodes * config.frames / (time.perf_counter() - t)
+    wall = time.perf_counter() - t
     stages: dict = {}
     for secs in json.loads((out / "run_info.json").read_text())["episode_seconds"].values():
         for k, v in secs.items():
             stages[k] = stages.get(k, 0.0) + v
     per_frame_ms = {k: round(1e3 * v / (episodes * config.frames), 1) for k, v in sorted(stages.items())}
-    return fps, per_frame_ms
+    return episodes * config.frames / wall, per_frame_ms, round(stages["total"] / (workers * wall), 3)
 
 
 def inprocess_fps(config, root: Path, rounds: int = 2) -> tuple[float, float]:
@@ -134,17 +139,18 @@ def main(argv=None) -> int:
     finally:
         shutil.rmtree(root, ignore_errors=True)
     render_fps = max(runs["render"])
-    fps_1, ms_1 = max(runs["1"], key=lambda x: x[0])
-    fps_2 = max(fps for fps, _ in runs["2"])
+    fps_1, ms_1, busy_1 = max(runs["1"], key=lambda x: x[0])
+    fps_2, ms_2, busy_2 = max(runs["2"], key=lambda x: x[0])
     out = {"cameras": 16, "format": args.format, "frames_per_episode": args.frames, "episodes_per_worker": args.episodes,
            "repeat": args.repeat, "render_fps": round(render_fps, 3), "fps_1": round(fps_1, 3), "fps_2": round(fps_2, 3),
            "render_fps_runs": [round(x, 2) for x in runs["render"]],
-           "fps_1_runs": [round(x, 2) for x, _ in runs["1"]], "fps_2_runs": [round(x, 2) for x, _ in runs["2"]],
+           "fps_1_runs": [round(x[0], 2) for x in runs["1"]], "fps_2_runs": [round(x[0], 2) for x in runs["2"]],
            "overhead": round(render_fps / fps_1 - 1, 3),
            "overhead_same_run": round(ms_1["total"] / ms_1["render"] - 1, 2), "speedup": round(fps_2 / fps_1, 2),
            "fps_inline": round(fps_inline, 3), "fps_overlap": round(fps_overlap, 3),
            "overlap_speedup": round(fps_overlap / fps_inline, 2),
-           "stage_ms_per_frame_1": ms_1, "cpus": len(os.sched_getaffinity(0)), "load_average": [round(x, 2) for x in os.getloadavg()]}
+           "stage_ms_per_frame_1": ms_1, "stage_ms_per_frame_2": ms_2, "busy_1": busy_1, "busy_2": busy_2,
+           "cpus": len(os.sched_getaffinity(0)), "load_average": [round(x, 2) for x in os.getloadavg()]}
     if args.json:
         print(json.dumps(out))
     else:
@@ -156,6 +162,8 @@ def main(argv=None) -> int:
         print(f"generation,      1 worker : {out['fps_1']:.2f} frames/s  (writing + processing +{out['overhead']:.0%})")
         print("generation stages, 1 worker, ms per frame:", ms_1)
         print(f"generation,      2 workers: {out['fps_2']:.2f} frames/s  ({out['speedup']:.2f}x one worker)")
+        print("generation stages, 2 workers, ms per frame of a worker:", ms_2)
+        print(f"time in episodes: {out['busy_1']:.0%} of 1 worker's wall clock, {out['busy_2']:.0%} of 2 workers'")
         print(f"one episode in-process: {out['fps_inline']:.2f} frames/s inline, {out['fps_overlap']:.2f} "
               f"overlapped ({out['overlap_speedup']:.2f}x)")
     return 0
