@@ -362,7 +362,7 @@ def test_process_with_truth_equals_process_and_ground_truth(opening):
         both.process_with_truth(frames[0], labels[0][:2])
 
 
-def test_compiled_angle_test_runs_without_a_writable_cache(tmp_path):
+def test_compiled_angle_test_runs_without_a_writable_cache():
     """Where numba finds no cache folder, the kernel is compiled per process instead of failing at import."""
     import subprocess
     import sys
