@@ -98,6 +98,16 @@ class Pipeline:
         self._terms = AngleTerms(bg, p.threshold_deg, p.brightness_floor, p.dark_delta)
         self.reset()
 
+    def with_params(self, params: PipelineParams) -> Pipeline:
+        """A pipeline of the same cameras, rectifier and background with other ``params``
+        (fresh temporal state). Nothing per pixel is rebuilt: ~0.1 ms instead of ~80 ms
+        for 16 cameras (tuning makes one per trial)."""
+        self._need_background()
+        pipe = Pipeline(self.cameras, params, rectifier=self.rectifier)
+        pipe._terms = self._terms.with_thresholds(params.threshold_deg, params.brightness_floor,
+                                                  params.dark_delta)
+        return pipe
+
     @property
     def background(self) -> np.ndarray:
         """(n_cams, H, W, 3) float32 background model."""

@@ -23,6 +23,8 @@ array([[0, 0, 0, 0],
 
 from __future__ import annotations
 
+import copy
+
 import cv2
 import numpy as np
 
@@ -84,10 +86,19 @@ class AngleTerms:
         bg = np.ascontiguousarray(background, dtype=np.float32)
         whole = bg.min() >= 0 and bg.max() <= 255 and np.array_equal(np.rint(bg), bg)
         self._levels = bg.astype(np.uint8) if whole else bg       # what the compiled pass reads
+        self._set_thresholds(threshold_deg, brightness_floor, dark_delta)
+
+    def _set_thresholds(self, threshold_deg: float, brightness_floor: float, dark_delta: float) -> None:
         c = np.cos(np.radians(threshold_deg))
         self.c2 = float(c * c)
         self.floor2 = np.float32(brightness_floor) ** 2
         self.delta2 = np.float32(dark_delta) ** 2
+
+    def with_thresholds(self, threshold_deg: float, brightness_floor: float, dark_delta: float) -> AngleTerms:
+        """The same background (shared, not copied) with other thresholds."""
+        terms = copy.copy(self)
+        terms._set_thresholds(threshold_deg, brightness_floor, dark_delta)
+        return terms
 
     @property
     def background(self) -> np.ndarray:

@@ -15,7 +15,6 @@ import numpy as np
 from .core import Pipeline
 from .metrics import cdnet_metrics, confusion, evaluate
 from .params import PipelineParams
-from .rectify import Rectifier
 from .rle import scanline_bits
 
 
@@ -70,14 +69,14 @@ def run_sequence(pipeline: Pipeline, frames: Iterable[np.ndarray],
                      counts if labels is not None else None)
 
 
-def scanline_f1(cameras, background, frames, gt_scanlines, params: PipelineParams,
-                rectifier: Rectifier | None = None) -> float:
+def scanline_f1(pipeline: Pipeline, frames, gt_scanlines, params: PipelineParams) -> float:
     """Scanline F1 of ``params`` on an in-memory sequence (for tuning).
 
+    pipeline : a :class:`Pipeline` of the cameras with their background (its parameters
+        are not used: :meth:`Pipeline.with_params` shares its maps and background)
     frames : (n_frames, n_cams, H, W, 3) uint8; gt_scanlines : (n_frames, n_cams, W) bool
-    rectifier : the cameras' :class:`Rectifier`, shared between calls (default: built here)
     """
-    pipe = Pipeline(cameras, params, background, rectifier)
+    pipe = pipeline.with_params(params)
     pred = np.stack([pipe.process(f) for f in frames])
     c = confusion(pred, gt_scanlines)
     return float(cdnet_metrics(**c)["f1"])

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .core import Pipeline
 from .params import PipelineParams
-from .rectify import Rectifier
 from .runs import scanline_f1
 
 #: Search space: name -> (kind, low, high[, step]).
@@ -64,13 +64,13 @@ def tune(cameras, background, frames, gt_scanlines, n_trials: int, seed: int = 0
         raise ValueError(f"trials: expected an integer >= 1, got {n_trials}")
     start = PipelineParams() if start is None else start
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    rectifier = Rectifier.build(cameras)      # the maps serve every trial's parameters
+    base = Pipeline(cameras, start, background)   # maps and background serve every trial
     study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
     study.enqueue_trial({k: getattr(start, k) for k in SPACE})
     f1s = []
 
     def objective(trial):
-        f1 = scanline_f1(cameras, background, frames, gt_scanlines, suggest(trial), rectifier)
+        f1 = scanline_f1(base, frames, gt_scanlines, suggest(trial))
         f1s.append(f1)
         if progress is not None:
             progress(f1)
