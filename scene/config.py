@@ -109,12 +109,16 @@ class Scene:
         path = Path(path)
         if not path.is_file():
             raise FileNotFoundError(f"scene file not found: {path}")
-        text = path.read_text()
+        return Scene.from_text(path.read_text(), str(path))
+
+    @staticmethod
+    def from_text(text: str, source: str = "scene") -> Scene:
+        """Build and validate a scene from the text of a scene file (``source`` names it in errors)."""
         try:
             config = yaml.load(text, Loader=_SAFE_LOADER)
         except yaml.YAMLError as exc:
-            raise ValueError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from None
-        return _parse_scene(config, str(path))
+            raise ValueError(f"{source}: not valid YAML ({str(exc).splitlines()[0]})") from None
+        return _parse_scene(config, source)
 
 
 def load_scene(name_or_path: str | Path) -> Scene:

@@ -8,14 +8,18 @@ random streams come from ``np.random.SeedSequence(seed, spawn_key=(index,))`` (t
 ``index``-th child of ``SeedSequence(seed).spawn``), never from the worker, so the bytes do
 not depend on which worker renders the episode or how many there are.
 
-Each process keeps one :class:`render.Renderer` per (scene, cameras) in a module cache
-(one GL context per process; renderers are never created and destroyed per episode).
-The layout is in docs/dataset.md.
+Each process keeps its last :data:`KEEP` :class:`render.Renderer` s, one per (scene text,
+people, cameras), in a module cache (one GL context per process; renderers are not
+created and destroyed per episode), and closes older ones: a worker of a long-lived
+cluster renders run after run. The caches are keyed by the scene file's text, not its
+path, so a file edited between two runs is rendered as it is now. The layout is in
+docs/dataset.md.
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import os
@@ -23,6 +27,7 @@ import shutil
 import tempfile
 import time
 import zipfile
+from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,9 +41,28 @@ from testbed.dataset import frame_name, write_calibration, write_png
 #: Formats of the RGB frames: PNG per frame, or one lossless FFV1 video per camera.
 FORMATS = ("png", "video")
 
-_RENDERERS: dict = {}   # (scene source, people, cameras) -> Renderer, one per process
-_RECTIFIERS: dict = {}  # (scene source, cameras) -> Rectifier, shared by that rig's pipelines
-_PIPELINES: dict = {}  # (renderer key, parameters) -> Pipeline on that renderer's background, reset per episode
+#: Renderers kept per process (a lab renderer holds ~150 MB: canvases, frames, framebuffers);
+#: as many rigs' rectification maps, and twice as many pipelines (one per parameter set).
+KEEP = 2
+
+_SCENES: OrderedDict = OrderedDict()      # scene text -> Scene, parsed once
+_RENDERERS: OrderedDict = OrderedDict()   # (scene text, people, cameras) -> Renderer
+_RECTIFIERS: OrderedDict = OrderedDict()  # (scene text, cameras) -> Rectifier, shared by that rig's pipelines
+_PIPELINES: OrderedDict = OrderedDict()   # (renderer key, parameters) -> Pipeline on its background, reset per episode
+
+
+def _cached(cache: OrderedDict, key, make, keep: int = KEEP):
+    """``cache[key]``, made by ``make()`` when missing; the ``keep`` most recently used stay,
+    older values are dropped (and closed, if they can be)."""
+    if key in cache:
+        cache.move_to_end(key)
+        return cache[key]
+    value = cache[key] = make()
+    while len(cache) > keep:
+        _, old = cache.popitem(last=False)
+        if hasattr(old, "close"):
+            old.close()
+    return value
 
 
 @dataclass(frozen=True)
@@ -52,6 +76,10 @@ class EpisodeConfig:
     seed : the run's seed S
     fmt : "png" or "video"
     params : pipeline parameters as a plain dict (PipelineParams.to_dict())
+    scene_yaml : the scene file's text, read once when the run starts (:func:`with_scene_text`),
+        so that every episode renders the same scene even if the file is edited during the
+        run, and workers need not see the file; "" to read ``scene`` when needed. Not in
+        :meth:`to_dict` (each episode's meta.json holds it)
     """
 
     scene: str
@@ -61,6 +89,7 @@ class EpisodeConfig:
     seed: int
     fmt: str = "png"
     params: dict = field(default_factory=dict)
+    scene_yaml: str = field(default="", repr=False)
 
     def to_dict(self) -> dict:
         return {"scene": self.scene, "people": self.people,
@@ -82,21 +111,43 @@ def episode_seed(seed: int, index: int) -> np.random.SeedSequence:
     return np.random.SeedSequence(int(seed), spawn_key=(int(index),))
 
 
+def _scene_file(source: str) -> Path:
+    from scene.config import BUILTIN_SCENES, scene_path
+
+    return scene_path(source) if source in BUILTIN_SCENES else Path(source)
+
+
+def scene_text(config: EpisodeConfig) -> str:
+    """The text of the run's scene: ``config.scene_yaml``, else the scene file's text now."""
+    if config.scene_yaml:
+        return config.scene_yaml
+    path = _scene_file(config.scene)
+    if not path.is_file():
+        raise FileNotFoundError(f"scene file not found: {path}")
+    return path.read_text()
+
+
+def with_scene_text(config: EpisodeConfig) -> EpisodeConfig:
+    """``config`` with its scene file's text read (:attr:`EpisodeConfig.scene_yaml`), once."""
+    return config if config.scene_yaml else dataclasses.replace(config, scene_yaml=scene_text(config))
+
+
 def load_episode_scene(config: EpisodeConfig):
-    """The scene of a run, with ``config.people`` people."""
-    from scene import load_scene
+    """The scene of a run (parsed from :func:`scene_text`), with ``config.people`` people."""
+    from scene import Scene
     from testbed.episode import with_people
 
-    return with_people(load_scene(config.scene), config.people)
+    text = scene_text(config)
+    scene = _cached(_SCENES, text, lambda: Scene.from_text(text, str(_scene_file(config.scene))), 2 * KEEP)
+    return with_people(scene, config.people)
 
 
 def _renderer(config: EpisodeConfig, scene):
+    """This process's renderer of ``scene`` (:func:`load_episode_scene` of ``config``)."""
     from render import Renderer
 
-    key = (config.scene, scene.people.count, config.cameras)
-    if key not in _RENDERERS:
-        _RENDERERS[key] = Renderer(scene, config.cameras)
-    return _RENDERERS[key]
+    key = (scene_text(config), scene.people.count, config.cameras)
+    return _cached(_RENDERERS, key, lambda: Renderer(scene, config.cameras))
 
 
 def checksums(root: Path, known: dict[str, str] | None = None, algorithm: str = ALGORITHM) -> dict[str, str]:
@@ -228,6 +279,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     from testbed.episode import walk
 
     out = Path(out)
+    config = with_scene_text(config)             # one text for the whole episode
     scene = load_episode_scene(config)
     renderer = _renderer(config, scene)
     cameras = renderer.cameras
@@ -238,13 +290,14 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     track = walk(scene, config.frames, motion_rng)
     people = scene.people
     bg = renderer.background().rgb
-    key = (config.scene, people.count, config.cameras, json.dumps(config.params, sort_keys=True))
-    if key not in _PIPELINES:  # background levels, ~15 MB for 16 cameras: once per worker
-        rig = (config.scene, tuple(numbers))
-        if rig not in _RECTIFIERS:
-            _RECTIFIERS[rig] = Rectifier.build(cameras)
-        _PIPELINES[key] = Pipeline(cameras, params, bg, _RECTIFIERS[rig])
-    pipe = _PIPELINES[key]
+    text = config.scene_yaml
+
+    def pipeline():                              # background levels, ~15 MB for 16 cameras: once per worker
+        rectifier = _cached(_RECTIFIERS, (text, tuple(numbers)), lambda: Rectifier.build(cameras))
+        return Pipeline(cameras, params, bg, rectifier)
+
+    pipe = _cached(_PIPELINES, (text, people.count, config.cameras, json.dumps(config.params, sort_keys=True)),
+                   pipeline, 2 * KEEP)
     pipe.reset()
     xy_all, _, _ = scene.floor_poses()
     by_number = {c.number: k for k, c in enumerate(scene.cameras)}
@@ -337,7 +390,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
         source = config.scene
         meta = {
             "episode": index, "seed": config.seed, "spawn_key": [index],
-            "scene": scene.name, "scene_file": source, "scene_yaml": _scene_text(source),
+            "scene": scene.name, "scene_file": source, "scene_yaml": text,
             "people": people.count, "cameras": numbers, "frames": config.frames, "dt": scene.dt,
             "format": config.fmt, "backend": renderer.backend,
             "background": "clean: no sensor noise, no gain jitter",
@@ -357,9 +410,3 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
         raise
     return {"index": index, "name": name, "seed": config.seed, "spawn_key": [index],
             "frames": config.frames, "files": files}
-
-
-def _scene_text(source: str) -> str:
-    from scene.config import BUILTIN_SCENES, scene_path
-
-    return (scene_path(source) if source in BUILTIN_SCENES else Path(source)).read_text()

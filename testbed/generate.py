@@ -151,7 +151,8 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     Without ``resume`` or ``overwrite`` an existing non-empty ``out`` is refused; with
     ``overwrite`` it is emptied; with ``resume`` the manifest's episodes whose files
     verify are kept and everything else (unlisted or corrupt episode folders, temporary
-    folders of killed runs) is removed. Then the manifest of the kept episodes is written
+    folders of killed runs) is removed; a kept episode rendered from another scene text
+    than ``config``'s is refused (:func:`check_same_scene`). Then the manifest of the kept episodes is written
     (none on a fresh run: a run stopped before its first episode still names its
     arguments). Raises ValueError / FileExistsError before any work.
     """
@@ -170,12 +171,24 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
             algorithm = manifest_algorithm(old)
             for entry in old.get("episodes", []):
                 if verify_episode(out, entry, algorithm):
+                    check_same_scene(out, entry, config)
                     if algorithm != ALGORITHM:          # an older manifest: its episodes' checksums renewed
                         entry = entry | {"files": checksums(out / entry["name"])}
                     keep[int(entry["index"])] = entry
         remove_unlisted(out, keep)
     write_json_atomic(out / MANIFEST, manifest(config, episodes, keep))
     return keep
+
+
+def check_same_scene(out: Path, entry: dict, config: EpisodeConfig) -> None:
+    """Refuse to resume with a scene file that has changed since episode ``entry`` was rendered
+    (its meta.json holds the scene's text); nothing is checked when ``config`` has no text."""
+    if not config.scene_yaml:
+        return
+    meta = json.loads((Path(out) / entry["name"] / "meta.json").read_text())
+    if meta.get("scene_yaml") != config.scene_yaml:
+        raise ValueError(f"--resume: {config.scene} is not the scene {entry['name']} was rendered from "
+                         f"(its meta.json's scene_yaml); restore it, or use --overwrite to start again")
 
 
 def unlisted(out: Path, entries: dict[int, dict]) -> list[Path]:

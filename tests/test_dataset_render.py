@@ -73,9 +73,10 @@ def test_gt_hull_contains_every_person(dataset):
 def test_silhouettes_equal_each_person_rendered_alone(dataset, lab):
     import cv2
 
-    from testbed.episodes import _RENDERERS
+    from testbed.episodes import EpisodeConfig, _renderer, load_episode_scene
 
-    (renderer,) = [r for k, r in _RENDERERS.items() if k[2] == (2, 7, 11)]
+    config = EpisodeConfig("lab", None, (2, 7, 11), 2, 4)
+    renderer = _renderer(config, load_episode_scene(config))
     ep = dataset / "episode_0000"
     people = read_people(ep / "people.csv")
     for f in (0, 1):
@@ -343,3 +344,84 @@ def test_resuming_a_finished_run_needs_no_disk_space(dataset, tmp_path, capsys, 
     (out / "manifest.json").unlink()                 # now both episodes are to be redone: refused
     assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 2
     assert "--out: 0 MB free on" in capsys.readouterr().err
+
+
+def test_a_scene_file_edited_between_runs_is_rendered_as_edited(tmp_path, monkeypatch):
+    """A process keeps its renderers from run to run (the workers of a long-lived cluster):
+    they are keyed by the scene file's text, not its path. A run reads the text once."""
+    from collections import OrderedDict
+
+    from scene.config import scene_path
+    from testbed import episodes
+
+    text = scene_path("lab").read_text()
+    edited = text.replace("yaw_deg: 70.5", "yaw_deg: 60.0")      # camera 2 turned
+    assert edited != text
+    scene = tmp_path / "room.yaml"
+    scene.write_text(text)
+    config = episodes.EpisodeConfig(str(scene), 1, (2,), 1, 5)
+    started = episodes.with_scene_text(config)                  # a run started before the edit
+
+    def run(name, cfg):
+        (tmp_path / name).mkdir()
+        return episodes.render_episode(cfg, 0, str(tmp_path / name))["files"]
+
+    before = run("before", config)
+    scene.write_text(edited)
+    after = run("after", config)
+    assert run("started", started) == before                    # the text read when its run started
+    fresh = OrderedDict()
+    with monkeypatch.context() as m:                            # the edited scene in a new process's caches
+        for name in ("_SCENES", "_RECTIFIERS", "_PIPELINES"):
+            m.setattr(episodes, name, OrderedDict())
+        m.setattr(episodes, "_RENDERERS", fresh)
+        want = run("fresh", config)
+    for r in fresh.values():
+        r.close()
+    assert after == want
+    for rel in ("frames/cam02/000000.png", "background/cam02.png", "calibration/cam02.yaml", "meta.json"):
+        assert after[rel] != before[rel]
+
+
+def test_resume_refuses_a_scene_file_edited_since(tmp_path, capsys):
+    from scene.config import scene_path
+
+    text = scene_path("lab").read_text()
+    scene = tmp_path / "room.yaml"
+    scene.write_text(text)
+    out = tmp_path / "ds"
+    argv = ["render", str(scene), "--episodes", "2", "--frames", "1", "--cameras", "3", "--people", "1",
+            "--workers", "0", "--out", str(out)]
+    assert main(argv) == 0
+    shutil.rmtree(out / "episode_0001")                           # as if the run had been killed
+    m = (out / "manifest.json").read_bytes()
+    scene.write_text(text.replace("noise_std: 2.0", "noise_std: 3.0"))
+    capsys.readouterr()
+    assert main(argv + ["--resume"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"camtask render: error: --resume: {scene} is not the scene episode_0000 was rendered from "
+                   "(its meta.json's scene_yaml); restore it, or use --overwrite to start again")
+    assert (out / "manifest.json").read_bytes() == m and (out / "episode_0000").is_dir()
+    scene.write_text(text)
+    assert main(argv + ["--resume"]) == 0
+    assert len(json.loads((out / "manifest.json").read_text())["episodes"]) == 2
+
+
+def test_process_caches_keep_the_most_recent_and_close_the_rest():
+    from collections import OrderedDict
+
+    from testbed.episodes import _cached
+
+    closed = []
+
+    class Thing:
+        def __init__(self, name):
+            self.name = name
+
+        def close(self):
+            closed.append(self.name)
+
+    cache = OrderedDict()
+    made = [_cached(cache, k, lambda k=k: Thing(k), keep=2).name for k in ("a", "b", "a", "c")]
+    assert made == ["a", "b", "a", "c"] and list(cache) == ["a", "c"] and closed == ["b"]   # "a" was used last
+    assert _cached(cache, "a", lambda: Thing("new")).name == "a"                            # kept, not remade

@@ -63,15 +63,20 @@ def build_config(args: argparse.Namespace):
     """Validate the arguments (no rendering) and return the :class:`EpisodeConfig`."""
     from pipeline.params import load_params
     from render.renderer import check_camera_numbers
-    from testbed.episodes import EpisodeConfig, load_episode_scene, silhouette_dtype
+    from testbed.episodes import (
+        EpisodeConfig,
+        load_episode_scene,
+        silhouette_dtype,
+        with_scene_text,
+    )
 
     check_positive("--episodes", args.episodes)
     check_positive("--frames", args.frames)
     if args.workers is not None and args.workers < 0:
         raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
-    config = EpisodeConfig(scene=args.scene, people=args.people, cameras=parse_cameras(args.cameras),
-                           frames=args.frames, seed=args.seed, fmt=args.format,
-                           params=load_params(args.params).to_dict())
+    config = with_scene_text(EpisodeConfig(scene=args.scene, people=args.people, cameras=parse_cameras(args.cameras),
+                                           frames=args.frames, seed=args.seed, fmt=args.format,
+                                           params=load_params(args.params).to_dict()))
     scene = load_episode_scene(config)
     if not scene.is_calibrated:
         raise ValueError(f"scene: {scene.name!r} has floor-plane cameras only; rendering needs calibrated cameras")
