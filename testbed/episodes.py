@@ -158,12 +158,26 @@ def checksums(root: Path, known: dict[str, str] | None = None, algorithm: str = 
     algorithm : see :mod:`testbed.checksum`
     """
     known = known or {}
-    out = {}
-    for p in sorted(root.rglob("*")):
-        if p.is_file():
-            rel = p.relative_to(root).as_posix()
-            out[rel] = known[rel] if rel in known else file_digest(p, algorithm)
-    return out
+    root = Path(root)
+    return {rel: known[rel] if rel in known else file_digest(root / rel, algorithm) for rel in files_under(root)}
+
+
+def files_under(root: str | os.PathLike) -> list[str]:
+    """Every file under ``root`` (symbolic links to files included, not followed into
+    folders), as POSIX paths relative to it, sorted as ``sorted(root.rglob("*"))`` sorts
+    them: by path components. (``os.scandir`` strings: ~0.6 ms for the ~1200 files of a
+    24-frame lab episode, ~11 ms with ``pathlib``.)
+    """
+    found, todo = [], [(os.fspath(root), "")]
+    while todo:
+        folder, prefix = todo.pop()
+        with os.scandir(folder) as entries:
+            for e in entries:
+                if e.is_dir(follow_symlinks=False):
+                    todo.append((e.path, f"{prefix}{e.name}/"))
+                elif e.is_file():
+                    found.append(prefix + e.name)
+    return sorted(found, key=lambda rel: rel.split("/"))
 
 
 def save_npz_exact(path: Path, **arrays) -> None:

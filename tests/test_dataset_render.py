@@ -425,3 +425,16 @@ def test_process_caches_keep_the_most_recent_and_close_the_rest():
     made = [_cached(cache, k, lambda k=k: Thing(k), keep=2).name for k in ("a", "b", "a", "c")]
     assert made == ["a", "b", "a", "c"] and list(cache) == ["a", "c"] and closed == ["b"]   # "a" was used last
     assert _cached(cache, "a", lambda: Thing("new")).name == "a"                            # kept, not remade
+
+
+def test_files_under_lists_and_sorts_like_rglob(tmp_path):
+    from testbed.episodes import files_under
+
+    for rel in ("b", "a-b/x", "a/b", "a/c/d", "a.b", "a/c-d", "A", "a/c/e/f"):
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(rel)
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "a" / "link").symlink_to(tmp_path / "b")
+    want = [p.relative_to(tmp_path).as_posix() for p in sorted(tmp_path.rglob("*")) if p.is_file()]
+    assert files_under(tmp_path) == want
+    assert want.index("a/c/e/f") < want.index("a/c-d") < want.index("a-b/x")   # by component, not by string
