@@ -152,9 +152,10 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     ``overwrite`` it is emptied; with ``resume`` the manifest's episodes whose files
     verify are kept and everything else (unlisted or corrupt episode folders, temporary
     folders of killed runs) is removed; a kept episode rendered from another scene text
-    than ``config``'s is refused (:func:`check_same_scene`). Then the manifest of the kept episodes is written
-    (none on a fresh run: a run stopped before its first episode still names its
-    arguments). Raises ValueError / FileExistsError before any work.
+    than ``config``'s is refused (:func:`check_same_scene`). Then the manifest of the
+    kept episodes is written (none on a fresh run: a run stopped before its first
+    episode still names its arguments). Raises ValueError / FileExistsError before any
+    work.
     """
     out = check_out(out, resume, overwrite)
     existing = [p for p in out.iterdir()]
