@@ -18,6 +18,8 @@ manifest whatever the worker count or completion order.
 from __future__ import annotations
 
 import contextlib
+import errno
+import fcntl
 import json
 import os
 import platform
@@ -34,6 +36,8 @@ from testbed.parallel import default_workers
 
 MANIFEST = "manifest.json"
 RUN_INFO = "run_info.json"
+#: Locked (``flock``) by the run writing DIR, deleted when it ends; see :func:`exclusive`.
+LOCK = ".camtask-render.lock"
 #: 2: BLAKE3 checksums named by ``checksum``; 1: sha256, no ``checksum`` key (still resumable).
 FORMAT_VERSION = 2
 
@@ -102,7 +106,7 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
         probe.unlink()
     except OSError as exc:
         raise ValueError(f"--out: cannot write to {out} ({exc.strerror or exc})") from None
-    if not (resume or overwrite) and any(out.iterdir()):
+    if not (resume or overwrite) and any(p.name != LOCK for p in out.iterdir()):
         raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "
                               "or --overwrite to replace it")
     return out
@@ -161,7 +165,7 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     existing = [p for p in out.iterdir()]
     keep: dict[int, dict] = {}
     if overwrite:
-        for p in existing:
+        for p in (p for p in existing if p.name != LOCK):
             shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
     elif resume and existing:
         old = read_manifest(out)
@@ -179,6 +183,50 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
         remove_unlisted(out, keep)
     write_json_atomic(out / MANIFEST, manifest(config, episodes, keep))
     return keep
+
+
+@contextlib.contextmanager
+def exclusive(out: Path):
+    """Hold ``out/LOCK`` (an exclusive ``flock``) while a run writes into ``out``.
+
+    A second run into the same folder (a ``--resume`` or ``--overwrite`` in another
+    terminal) would delete this one's temporary folders and rewrite its manifest; it is
+    refused instead (FileExistsError), before it touches anything. The lock goes with the
+    process, so a killed run leaves none (at most the empty file, which is ignored). On a
+    file system without ``flock`` the run goes on with a warning.
+    """
+    path = Path(out) / LOCK
+    fd = _lock(path, out)
+    try:
+        yield
+    finally:
+        if fd is not None:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(path)
+            os.close(fd)
+
+
+def _lock(path: Path, out: Path) -> int | None:
+    """The descriptor of ``path``, locked; None where the file system cannot lock."""
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN):
+                raise FileExistsError(f"--out: another camtask render is writing to {out} (it holds {path}); "
+                                      "wait for it to finish or stop it") from None
+            print(f"warning: --out: cannot lock {path} ({exc.strerror}): a second run into {out} would not "
+                  "be refused", file=sys.stderr)
+            return None
+        try:
+            same = os.stat(path).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            return fd
+        os.close(fd)                                # its holder deleted it meanwhile: lock the new one
 
 
 def check_same_scene(out: Path, entry: dict, config: EpisodeConfig) -> None:

@@ -90,3 +90,31 @@ def test_manifest_before_the_first_episode_and_unlisted_folders_removed(tmp_path
         (out / name).mkdir()
     remove_unlisted(out)
     assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "notes"]
+
+
+@pytest.mark.parametrize("mode", ["--resume", "--overwrite"])
+def test_a_folder_another_run_is_writing_is_refused(tmp_path, capsys, mode):
+    from testbed.generate import LOCK, exclusive
+
+    out = tmp_path / "ds"
+    out.mkdir()
+    (out / "manifest.json").write_text("{}")
+    with exclusive(out):                          # as a run in another terminal holds it
+        code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", mode)
+        assert code == 2 and line == (f"camtask render: error: --out: another camtask render is writing to {out} "
+                                      f"(it holds {out / LOCK}); wait for it to finish or stop it")
+        assert (out / "manifest.json").read_text() == "{}" and (out / LOCK).exists()
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json"]   # the holder removed its lock
+
+
+def test_a_left_lock_file_is_taken_over(tmp_path):
+    """A killed run's lock file (no lock held) neither blocks the next run nor counts as content."""
+    from testbed.generate import LOCK, check_out, exclusive
+
+    out = tmp_path / "ds"
+    out.mkdir()
+    (out / LOCK).write_bytes(b"")
+    check_out(out)                                # not "exists and is not empty"
+    with exclusive(out):
+        assert (out / LOCK).exists()
+    assert not (out / LOCK).exists()

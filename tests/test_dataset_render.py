@@ -50,7 +50,7 @@ def test_layout_and_manifest(dataset, lab):
             assert z["scanlines"].shape == z["gt_scanlines"].shape == (2, 3, 640)
             assert z["scanlines"].dtype == bool and z["bearings"].shape == (3, 640)
             assert z["camera_numbers"].tolist() == [2, 7, 11]
-    assert not list(dataset.glob(".*tmp"))
+    assert not list(dataset.glob(".*tmp")) and not list(dataset.glob(".*lock"))   # the run's lock removed
     info = json.loads((dataset / "run_info.json").read_text())
     assert "started" in info and "versions" in info
     # different episodes walk differently

@@ -86,20 +86,9 @@ def build_config(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from testbed.episodes import load_episode_scene
-    from testbed.generate import (
-        check_out,
-        check_space,
-        estimate_bytes,
-        free_bytes,
-        generate,
-        prepare_output,
-        remove_unlisted,
-        size_text,
-    )
-    from testbed.parallel import default_workers, open_client
+    from testbed.generate import check_out, check_space, estimate_bytes, exclusive
+    from testbed.parallel import default_workers
 
     config = build_config(args)
     out = Path(args.out)
@@ -112,6 +101,25 @@ def run(args: argparse.Namespace) -> int:
         # one process per core, never more than there are episodes; one episode runs here
         workers = min(default_workers(), args.episodes)
         workers = 0 if workers == 1 else workers
+    with exclusive(out):                              # until the clean-up after the workers is done
+        return _run(args, config, scene, out, workers)
+
+
+def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None) -> int:
+    """The run itself, once ``out`` is checked and locked."""
+    from tqdm import tqdm
+
+    from testbed.generate import (
+        check_space,
+        estimate_bytes,
+        free_bytes,
+        generate,
+        prepare_output,
+        remove_unlisted,
+        size_text,
+    )
+    from testbed.parallel import open_client
+
     started = False
     try:
         with open_client(workers, args.scheduler) as client:
