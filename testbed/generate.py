@@ -303,6 +303,14 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     todo = [i for i in range(episodes) if i not in done]
     info = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "host": socket.gethostname(),
             "versions": versions(), "argv": sys.argv[1:]} | (run_info or {})
+    earlier = earlier_runs(out)                     # a resumed run's predecessors, kept in run_info.json
+    if earlier and keep:
+        was = earlier[-1].get("versions", {})
+        changed = sorted(k for k in set(was) | set(info["versions"]) if was.get(k) != info["versions"].get(k))
+        if changed:
+            print("warning: --resume: other package versions than the run before ("
+                  + ", ".join(f"{k} {was.get(k)} then, {info['versions'].get(k)} now" for k in changed)
+                  + "): the episodes it rendered may differ from this run's in their bytes", file=sys.stderr)
     hosts: dict[str, str] = {}
     stages: dict[str, dict] = {}
     complete = False
@@ -355,8 +363,27 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
             remove_unlisted(out, done)              # temporary folders of workers that died
         info |= {"finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "episodes_done": len(done),
                  "episode_hosts": dict(sorted(hosts.items())), "episode_seconds": dict(sorted(stages.items()))}
+        if earlier:
+            info["earlier_runs"] = earlier
         write_json_atomic(out / RUN_INFO, info)
     return done
+
+
+def earlier_runs(out: Path) -> list[dict]:
+    """The runs recorded in ``out``'s run_info.json, oldest first (none for a new folder).
+
+    A run rewrites run_info.json at its end with its own record at the top level; the
+    records of the runs before it into the same folder (a run and its ``--resume`` s) go
+    to ``earlier_runs``, so the hosts, versions and times of every kept episode survive.
+    """
+    try:
+        last = json.loads((Path(out) / RUN_INFO).read_text())
+    except (OSError, ValueError):
+        return []
+    if not isinstance(last, dict):
+        return []
+    before = last.pop("earlier_runs", [])
+    return [*(before if isinstance(before, list) else []), last]
 
 
 def frames_in_progress(out: Path, config: EpisodeConfig) -> dict[int, int]:

@@ -438,3 +438,24 @@ def test_files_under_lists_and_sorts_like_rglob(tmp_path):
     want = [p.relative_to(tmp_path).as_posix() for p in sorted(tmp_path.rglob("*")) if p.is_file()]
     assert files_under(tmp_path) == want
     assert want.index("a/c/e/f") < want.index("a/c-d") < want.index("a-b/x")   # by component, not by string
+
+
+def test_resume_keeps_the_earlier_runs_record_and_warns_of_other_versions(dataset, tmp_path, capsys):
+    import numpy
+
+    out = tmp_path / "resumed"
+    shutil.copytree(dataset, out)
+    shutil.rmtree(out / "episode_0001")
+    info = json.loads((out / "run_info.json").read_text())
+    info["versions"]["numpy"] = "1.0.0"                   # as if rendered with another numpy
+    (out / "run_info.json").write_text(json.dumps(info))
+    capsys.readouterr()
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 0
+    err = capsys.readouterr().err
+    assert (f"warning: --resume: other package versions than the run before (numpy 1.0.0 then, "
+            f"{numpy.__version__} now): the episodes it rendered may differ from this run's in their bytes") in err
+    now = json.loads((out / "run_info.json").read_text())
+    assert now["earlier_runs"] == [info]
+    assert list(now["episode_hosts"]) == ["episode_0001"] and list(info["episode_hosts"]) == [
+        "episode_0000", "episode_0001"]
+    assert files_of(out) == files_of(dataset)
