@@ -281,6 +281,26 @@ def versions() -> dict:
     return out
 
 
+#: Packages whose versions do not change a dataset's bytes (Dask checks its own across a cluster).
+NOT_IN_BYTES = ("python", "dask", "distributed")
+
+
+def check_worker_versions(client) -> None:
+    """Refuse a cluster whose workers run other versions of the packages that make the
+    bytes (numpy, OpenCV, the encoders, camtask, ...) than this process: their episodes
+    would differ from this machine's for the same seed. One line naming the first such
+    worker and what differs.
+    """
+    here = versions()
+    for worker, theirs in sorted(client.run(versions).items()):
+        changed = sorted(k for k in set(here) | set(theirs)
+                         if k not in NOT_IN_BYTES and here.get(k) != theirs.get(k))
+        if changed:
+            raise ValueError(f"--scheduler: worker {worker} has other package versions than this machine ("
+                             + ", ".join(f"{k} {theirs.get(k)} there, {here.get(k)} here" for k in changed)
+                             + "); its episodes would not be the same bytes")
+
+
 def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, dict], client=None,
              progress: Callable[[int], None] | None = None, retries: int = 2,
              run_info: dict | None = None) -> dict[int, dict]:

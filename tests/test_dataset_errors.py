@@ -118,3 +118,21 @@ def test_a_left_lock_file_is_taken_over(tmp_path):
     with exclusive(out):
         assert (out / LOCK).exists()
     assert not (out / LOCK).exists()
+
+
+def test_workers_with_other_package_versions_are_refused():
+    from testbed.generate import check_worker_versions, versions
+
+    class Cluster:                                  # client.run(f): f's result on every worker
+        def __init__(self, *changes):
+            self.changes = changes
+
+        def run(self, fn):
+            return {f"tcp://10.0.0.{i}:1": fn() | change for i, change in enumerate(self.changes)}
+
+    check_worker_versions(Cluster({}, {"python": "3.11.0", "dask": "1.0"}))   # not in the bytes: fine
+    here = versions()["numpy"]
+    with pytest.raises(ValueError) as err:
+        check_worker_versions(Cluster({}, {"numpy": "1.0.0"}))
+    assert str(err.value) == (f"--scheduler: worker tcp://10.0.0.1:1 has other package versions than this machine "
+                              f"(numpy 1.0.0 there, {here} here); its episodes would not be the same bytes")

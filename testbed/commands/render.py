@@ -111,6 +111,7 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
 
     from testbed.generate import (
         check_space,
+        check_worker_versions,
         estimate_bytes,
         free_bytes,
         generate,
@@ -123,6 +124,8 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     started = False
     try:
         with open_client(workers, args.scheduler) as client:
+            if args.scheduler is not None:
+                check_worker_versions(client)
             keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
             todo = args.episodes - len(keep)
             if todo == 0:
