@@ -293,12 +293,16 @@ def check_worker_versions(client) -> None:
     """
     here = versions()
     for worker, theirs in sorted(client.run(versions).items()):
-        changed = sorted(k for k in set(here) | set(theirs)
-                         if k not in NOT_IN_BYTES and here.get(k) != theirs.get(k))
-        if changed:
-            raise ValueError(f"--scheduler: worker {worker} has other package versions than this machine ("
-                             + ", ".join(f"{k} {theirs.get(k)} there, {here.get(k)} here" for k in changed)
-                             + "); its episodes would not be the same bytes")
+        if changes := version_changes(theirs, here, "there", "here"):
+            raise ValueError(f"--scheduler: worker {worker} has other package versions than this machine "
+                             f"({changes}); its episodes would not be the same bytes")
+
+
+def version_changes(a: dict, b: dict, a_name: str, b_name: str) -> str:
+    """The packages that make the bytes whose versions differ between two :func:`versions`
+    records, as ``"numpy 2.3.0 then, 2.4.6 now"`` (``a_name``, ``b_name``); "" if none."""
+    keys = sorted(k for k in set(a) | set(b) if k not in NOT_IN_BYTES and a.get(k) != b.get(k))
+    return ", ".join(f"{k} {a.get(k)} {a_name}, {b.get(k)} {b_name}" for k in keys)
 
 
 def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, dict], client=None,
@@ -324,13 +328,10 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     info = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "host": socket.gethostname(),
             "versions": versions(), "argv": sys.argv[1:]} | (run_info or {})
     earlier = earlier_runs(out)                     # a resumed run's predecessors, kept in run_info.json
-    if earlier and keep:
-        was = earlier[-1].get("versions", {})
-        changed = sorted(k for k in set(was) | set(info["versions"]) if was.get(k) != info["versions"].get(k))
-        if changed:
-            print("warning: --resume: other package versions than the run before ("
-                  + ", ".join(f"{k} {was.get(k)} then, {info['versions'].get(k)} now" for k in changed)
-                  + "): the episodes it rendered may differ from this run's in their bytes", file=sys.stderr)
+    if earlier and keep and (changes := version_changes(earlier[-1].get("versions", {}), info["versions"],
+                                                        "then", "now")):
+        print(f"warning: --resume: other package versions than the run before ({changes}): the episodes it "
+              "rendered may differ from this run's in their bytes", file=sys.stderr)
     hosts: dict[str, str] = {}
     stages: dict[str, dict] = {}
     complete = False
