@@ -106,10 +106,7 @@ class Scene:
     @staticmethod
     def from_yaml(path: str | Path) -> Scene:
         """Load a scene file."""
-        path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"scene file not found: {path}")
-        return Scene.from_text(path.read_text(), str(path))
+        return Scene.from_text(read_scene_text(path), str(path))
 
     @staticmethod
     def from_text(text: str, source: str = "scene") -> Scene:
@@ -127,9 +124,20 @@ def load_scene(name_or_path: str | Path) -> Scene:
     >>> load_scene("lab").room.area > 38
     True
     """
-    if str(name_or_path) in BUILTIN_SCENES:
-        return Scene.from_yaml(scene_path(str(name_or_path)))
-    return Scene.from_yaml(name_or_path)
+    return Scene.from_yaml(scene_file(name_or_path))
+
+
+def scene_file(name_or_path: str | Path) -> Path:
+    """The file of a built-in scene by name (``lab``, ``circle``), else the path itself."""
+    return scene_path(str(name_or_path)) if str(name_or_path) in BUILTIN_SCENES else Path(name_or_path)
+
+
+def read_scene_text(path: str | Path) -> str:
+    """The text of a scene file; a one-line FileNotFoundError when there is none."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"scene file not found: {path}")
+    return path.read_text()
 
 
 def scene_path(name: str) -> Path:

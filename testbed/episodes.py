@@ -111,20 +111,11 @@ def episode_seed(seed: int, index: int) -> np.random.SeedSequence:
     return np.random.SeedSequence(int(seed), spawn_key=(int(index),))
 
 
-def _scene_file(source: str) -> Path:
-    from scene.config import BUILTIN_SCENES, scene_path
-
-    return scene_path(source) if source in BUILTIN_SCENES else Path(source)
-
-
 def scene_text(config: EpisodeConfig) -> str:
     """The text of the run's scene: ``config.scene_yaml``, else the scene file's text now."""
-    if config.scene_yaml:
-        return config.scene_yaml
-    path = _scene_file(config.scene)
-    if not path.is_file():
-        raise FileNotFoundError(f"scene file not found: {path}")
-    return path.read_text()
+    from scene.config import read_scene_text, scene_file
+
+    return config.scene_yaml or read_scene_text(scene_file(config.scene))
 
 
 def with_scene_text(config: EpisodeConfig) -> EpisodeConfig:
@@ -135,10 +126,11 @@ def with_scene_text(config: EpisodeConfig) -> EpisodeConfig:
 def load_episode_scene(config: EpisodeConfig):
     """The scene of a run (parsed from :func:`scene_text`), with ``config.people`` people."""
     from scene import Scene
+    from scene.config import scene_file
     from testbed.episode import with_people
 
     text = scene_text(config)
-    scene = _cached(_SCENES, text, lambda: Scene.from_text(text, str(_scene_file(config.scene))), 2 * KEEP)
+    scene = _cached(_SCENES, text, lambda: Scene.from_text(text, str(scene_file(config.scene))), 2 * KEEP)
     return with_people(scene, config.people)
 
 

@@ -162,10 +162,10 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     work.
     """
     out = check_out(out, resume, overwrite)
-    existing = [p for p in out.iterdir()]
+    existing = [p for p in out.iterdir() if p.name != LOCK]     # the lock: this run's own
     keep: dict[int, dict] = {}
     if overwrite:
-        for p in (p for p in existing if p.name != LOCK):
+        for p in existing:
             shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
     elif resume and existing:
         old = read_manifest(out)

@@ -100,8 +100,6 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undisto
     progress : called with 1 for every image written (from several threads)
     Cameras are exported on a thread per core (OpenCV and the PNG encoder release the GIL).
     """
-    import yaml
-
     from scene import Scene
     from testbed.dataset import read_calibration
     from testbed.parallel import default_workers
@@ -110,7 +108,7 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undisto
     meta = json.loads((episode / "meta.json").read_text())
     numbers = list(meta["cameras"])
     frames = int(meta["frames"])
-    room = Scene.from_config(yaml.safe_load(meta["scene_yaml"]), source=str(episode / "meta.json")).room
+    room = Scene.from_text(meta["scene_yaml"], source=str(episode / "meta.json")).room
     gw, gh = grid_shape(room.polygon.bounds)
     table = read_people(episode / "people.csv")
     P = int(meta["people"])
