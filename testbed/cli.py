@@ -29,6 +29,18 @@ class UsageError(Exception):
     """A user mistake on the command line, printed as one line with exit code 2."""
 
 
+#: The largest ``--seed``: NumPy's SeedSequence takes no negative integer, Optuna's
+#: samplers (``camtask tune``) none from 2**32 up; every command takes the same range.
+SEED_MAX = 2**32 - 1
+
+
+def check_seed(value: int) -> int:
+    """``--seed`` of any command, checked before any work starts."""
+    if not 0 <= value <= SEED_MAX:
+        raise ValueError(f"--seed: expected an integer in 0..{SEED_MAX}, got {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="camtask",

@@ -18,6 +18,7 @@ def run(capsys, *argv):
     (["--workers", "-2"], "--workers: expected an integer >= 0, got -2"),
     (["--cameras", "3,99"], "--cameras: expected distinct camera numbers"),
     (["--people", "17"], "expected at most 16"),
+    (["--seed", "-1"], "--seed: expected an integer in 0..4294967295, got -1"),
 ])
 def test_bad_arguments(tmp_path, capsys, argv, message):
     out = tmp_path / "out"

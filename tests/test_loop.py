@@ -102,6 +102,7 @@ def test_people_validation():
     (["--people", "0"], "--people: expected at least 1 person"),
     (["--people", "500"], "do not fit in the room"),
     (["--frames", "0"], "--frames: expected a number >= 1"),
+    (["--seed", "-1"], "--seed: expected an integer in 0..4294967295, got -1"),
 ])
 def test_run_bad_input_is_one_line(capsys, argv, match):
     assert main(["run", "lab", *argv]) == 2

@@ -145,3 +145,10 @@ def test_tune_beats_defaults_on_dark_noisy_scene(tmp_path, render_dir, sequence,
     assert camtask(argv + ["--out", str(tmp_path / "again.yaml")]) == 0
     capsys.readouterr()
     assert load_params(tmp_path / "again.yaml") == tuned
+
+
+def test_tune_refuses_a_seed_optuna_cannot_take(tmp_path, render_dir):
+    for seed in ("-1", str(2**32)):
+        with pytest.raises(ValueError, match=f"--seed: expected an integer in 0..4294967295, got {seed}"):
+            camtask(["tune", str(render_dir), "--trials", "1", "--seed", seed, "--out", str(tmp_path / "p.yaml")])
+    assert not (tmp_path / "p.yaml").exists()

@@ -101,6 +101,7 @@ def test_seed_changes_numbers(capsys):
     (("moving", "--taskers", "optimal"), "--taskers: unknown value 'optimal'"),
     (("moving", "--update-every", "0"), "--update-every: expected integers >= 1"),
     (("static", "--plot", "fig.jpg"), "--plot: expected a .png"),
+    (("static", "--seed", "-1"), "--seed: expected an integer in 0..4294967295, got -1"),
 ])
 def test_bad_input_is_one_line(capsys, argv, message):
     assert cli.main(["study", *argv, "--workers", "0", "--no-progress"]) == 2

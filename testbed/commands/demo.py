@@ -27,13 +27,13 @@ def run(args: argparse.Namespace) -> int:
     from testbed.commands.run import execute, format_summary, prepare
     from testbed.topview import TopView
 
+    ns = argparse.Namespace(scene="lab", tasker="incremental", k=6, m=1, update_every=1, feedback="hull",
+                            frames=args.frames, people=3, params=None, seed=args.seed)
+    scene, config, params, truth, rng = prepare(ns)     # checks the arguments
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if not os.access(out, os.W_OK):
         raise ValueError(f"--out: folder {out} is not writable")
-    ns = argparse.Namespace(scene="lab", tasker="incremental", k=6, m=1, update_every=1, feedback="hull",
-                            frames=args.frames, people=3, params=None, seed=args.seed)
-    scene, config, params, truth, rng = prepare(ns)
     t0 = time.perf_counter()
     results, summary, bearings = execute(scene, config, params, truth, rng, out / "run.mp4")
     summary.update(seed=args.seed, seconds=round(time.perf_counter() - t0, 1))

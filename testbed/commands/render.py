@@ -63,6 +63,7 @@ def build_config(args: argparse.Namespace):
     """Validate the arguments (no rendering) and return the :class:`EpisodeConfig`."""
     from pipeline.params import load_params
     from render.renderer import check_camera_numbers
+    from testbed.cli import check_seed
     from testbed.episodes import (
         EpisodeConfig,
         load_episode_scene,
@@ -72,6 +73,7 @@ def build_config(args: argparse.Namespace):
 
     check_positive("--episodes", args.episodes)
     check_positive("--frames", args.frames)
+    check_seed(args.seed)
     if args.workers is not None and args.workers < 0:
         raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
     config = with_scene_text(EpisodeConfig(scene=args.scene, people=args.people, cameras=parse_cameras(args.cameras),

@@ -41,11 +41,13 @@ def prepare(args):
     """Validate the arguments and draw the walk: (scene, config, params, truth, sensor rng)."""
     from pipeline import load_params
     from scene import load_scene
+    from testbed.cli import check_seed
     from testbed.episode import walk, with_people
     from testbed.loop import LoopConfig
 
     if args.frames < 1:
         raise ValueError(f"--frames: expected a number >= 1, got {args.frames}")
+    check_seed(args.seed)
     scene = with_people(load_scene(args.scene), args.people)
     if not scene.is_calibrated:
         raise ValueError(f"SCENE: {scene.name!r} has floor-plane cameras only; `camtask run` renders "

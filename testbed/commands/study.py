@@ -12,6 +12,7 @@ import json
 import sys
 import time
 
+from testbed.cli import check_seed
 from testbed.parallel import default_workers, open_client, run_tasks
 
 STUDY_HELP = {
@@ -53,8 +54,7 @@ def run(args) -> int:
     mod = _module(args.study)
     if args.trials < 1:
         raise ValueError(f"--trials: expected an integer >= 1, got {args.trials}")
-    if args.seed < 0:
-        raise ValueError(f"--seed: expected an integer >= 0, got {args.seed}")
+    check_seed(args.seed)
     if args.workers is not None and args.workers < 0:
         raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
     if args.plot and not args.plot.lower().endswith(".png"):

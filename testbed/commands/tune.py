@@ -37,11 +37,13 @@ def run(args) -> int:
     from pipeline.io import RenderDir
     from pipeline.params import load_params
     from pipeline.tuning import tune
+    from testbed.cli import check_seed
 
     if args.trials < 1:
         raise ValueError(f"--trials: expected an integer >= 1, got {args.trials}")
     if args.frames < 1:
         raise ValueError(f"--frames: expected an integer >= 1, got {args.frames}")
+    check_seed(args.seed)
     start = load_params(args.params)
     render = RenderDir(args.dir)
     n = min(args.frames, len(render))
