@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -24,6 +23,8 @@ from typing import Any
 import yaml
 
 from scene.checks import check_mapping, check_positive
+
+from .files import write_atomic
 
 DEFAULT_PATH = Path(__file__).resolve().parent.parent / "assets" / "pipeline" / "default.yaml"
 
@@ -125,16 +126,3 @@ class PipelineParams:
 def load_params(path: str | os.PathLike | None = None) -> PipelineParams:
     """Parameters from ``path``, or the defaults in ``assets/pipeline/default.yaml``."""
     return PipelineParams.from_yaml(DEFAULT_PATH if path is None else path)
-
-
-def write_atomic(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same directory and os.replace."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

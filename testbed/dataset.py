@@ -23,13 +23,13 @@ import csv
 import json
 import os
 import shutil
-import tempfile
 from pathlib import Path
 from typing import Self
 
 import cv2
 import numpy as np
 
+from pipeline.files import temp_folder
 from scene.camera import Camera
 from testbed.png import write_png
 
@@ -93,7 +93,7 @@ class DatasetWriter:
         self.out = check_output_dir(out, overwrite)
         self.cameras = tuple(cameras)
         self.out.parent.mkdir(parents=True, exist_ok=True)
-        self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", suffix=".tmp", dir=self.out.parent))
+        self.tmp = temp_folder(self.out.parent, f".{self.out.name}.")
         for sub in ("calibration", "background"):
             (self.tmp / sub).mkdir()
         for c in self.cameras:

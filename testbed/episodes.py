@@ -24,7 +24,6 @@ import io
 import json
 import os
 import shutil
-import tempfile
 import time
 import zipfile
 from collections import OrderedDict
@@ -35,6 +34,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pipeline.files import temp_folder
 from testbed.checksum import ALGORITHM, file_digest
 from testbed.dataset import frame_name, write_calibration, write_png
 
@@ -311,7 +311,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     room = scene.room.polygon
 
     name = episode_name(index)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out))
+    tmp = temp_folder(out, f".{name}.")
     digests: dict[str, str] = {}  # checksums of the images, computed from the bytes written
     try:
         for sub in ("calibration", "background"):

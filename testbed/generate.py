@@ -43,7 +43,7 @@ FORMAT_VERSION = 2
 
 
 def write_json_atomic(path: Path, data: dict) -> None:
-    from pipeline.params import write_atomic
+    from pipeline.files import write_atomic
 
     write_atomic(path, (json.dumps(data, indent=1, sort_keys=True) + "\n").encode())
 

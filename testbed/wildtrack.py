@@ -32,7 +32,6 @@ import json
 import math
 import os
 import shutil
-import tempfile
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -40,6 +39,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pipeline.files import temp_folder
 from testbed.dataset import read_people, write_png
 
 #: Side of a ground-grid cell, metres (WILDTRACK: 2.5 cm).
@@ -113,7 +113,7 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undisto
     table = read_people(episode / "people.csv")
     P = int(meta["people"])
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    tmp = temp_folder(out.parent, f".{out.name}.")
     try:
         for sub in ("annotations_positions", "calibrations/intrinsic_zero", "calibrations/extrinsic"):
             (tmp / sub).mkdir(parents=True)

@@ -459,3 +459,23 @@ def test_resume_keeps_the_earlier_runs_record_and_warns_of_other_versions(datase
     assert list(now["episode_hosts"]) == ["episode_0001"] and list(info["episode_hosts"]) == [
         "episode_0000", "episode_0001"]
     assert files_of(out) == files_of(dataset)
+
+
+def test_datasets_and_exports_get_the_permissions_of_the_umask(tmp_path):
+    """No 0700 folder or 0600 file: others on a shared machine read what the umask lets them."""
+    import os
+    import stat
+
+    data, wild = tmp_path / "data", tmp_path / "wild"
+    old = os.umask(0o022)
+    try:
+        assert main(["render", "lab", "--frames", "1", "--cameras", "3", "--out", str(data), "--workers", "0"]) == 0
+        assert main(["export", "wildtrack", str(data), str(wild)]) == 0
+    finally:
+        os.umask(old)
+    for root in (data, wild):
+        modes = {p.relative_to(tmp_path).as_posix(): stat.S_IMODE(p.stat().st_mode)
+                 for p in [root, *root.rglob("*")]}
+        assert "data/manifest.json" in modes or "wild/grid.json" in modes
+        wrong = {k: oct(m) for k, m in modes.items() if m != (0o755 if (tmp_path / k).is_dir() else 0o644)}
+        assert wrong == {}

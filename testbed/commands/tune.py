@@ -79,12 +79,13 @@ def run(args) -> int:
 
 def plot_history(f1, path) -> None:
     """F1 per trial and best so far, as a PNG written atomically."""
-    import os
-    import tempfile
+    import io
 
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from pipeline.files import write_atomic
 
     f1 = np.asarray(f1)
     fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
@@ -97,12 +98,9 @@ def plot_history(f1, path) -> None:
     ax.legend(loc="lower right")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=path.parent or ".")
-    os.close(fd)
+    png = io.BytesIO()
     try:
-        fig.savefig(tmp, format="png")
-        os.replace(tmp, path)
+        fig.savefig(png, format="png")
     finally:
         plt.close(fig)
-        Path(tmp).unlink(missing_ok=True)
+    write_atomic(path, png.getvalue())

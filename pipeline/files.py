@@ -1,0 +1,47 @@
+"""Files and folders that appear whole: a temporary name beside the target, then a rename.
+
+Both helpers give what a plain ``open`` or ``mkdir`` would: permissions from the process
+umask (0644 files, 0755 folders under the usual 022). ``tempfile.mkstemp`` and
+``mkdtemp`` make theirs 0600 and 0700, which a rename keeps, so datasets written through
+them could not be read by the other users of a shared machine or cluster.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from pathlib import Path
+
+#: Attempts at an unused random name before giving up (each has 2**48 choices).
+ATTEMPTS = 100
+
+
+def _create(parent: Path, prefix: str, suffix: str, make):
+    """``(path, make(path))`` for an unused ``parent/prefix<random>suffix``; ``make`` creates
+    the path or raises FileExistsError."""
+    for _ in range(ATTEMPTS):
+        path = parent / f"{prefix}{secrets.token_hex(6)}{suffix}"
+        try:
+            return path, make(path)
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"no unused temporary name {prefix}*{suffix} in {parent}")
+
+
+def temp_folder(parent: str | os.PathLike, prefix: str, suffix: str = ".tmp") -> Path:
+    """A new empty folder ``parent/prefix<random>suffix``, permissions as ``mkdir`` gives."""
+    return _create(Path(parent), prefix, suffix, Path.mkdir)[0]
+
+
+def write_atomic(path: str | os.PathLike, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same folder and ``os.replace``."""
+    path = Path(path)
+    tmp, fd = _create(path.parent, f".{path.name}.", ".tmp",
+                      lambda p: os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
