@@ -113,3 +113,24 @@ def test_boxes_match_the_exported_calibration_with_and_without_undistortion(tmp_
     assert _box_errors(raw, people, 3, ignore_distortion=True).max() > 4
     img = cv2.imread(str(pinhole / "Image_subsets" / "C3" / "00000000.png"))
     assert img.shape == (480, 640, 3) and (img.reshape(-1, 3).any(axis=1)).all()   # no empty border
+
+
+@pytest.mark.parametrize("given, out, extra, message", [
+    ("data", "data", [], "is DIR"),
+    ("data", "data/episode_0000/wild", [], "is inside DIR"),
+    ("data", "data/wild", [], "is inside DIR"),
+    ("data/episode_0000", ".", ["--overwrite"], "holds DIR"),
+    ("data/episode_0000", "data", ["--overwrite"], "holds DIR"),
+])
+def test_export_refuses_an_out_that_is_in_or_holds_the_dataset(tmp_path, monkeypatch, capsys, given, out, extra,
+                                                               message):
+    """--overwrite would delete the dataset; inside it, the export would break an episode's checksums."""
+    episode = tmp_path / "data" / "episode_0000"
+    episode.mkdir(parents=True)
+    (episode / "meta.json").write_text("{}")
+    before = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*"))
+    monkeypatch.chdir(tmp_path)
+    assert main(["export", "wildtrack", given, out, *extra]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("camtask export: error: OUT: ") and message in err and "\n" not in err
+    assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before

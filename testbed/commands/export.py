@@ -40,6 +40,7 @@ def run(args) -> int:
     episode = root if (root / "meta.json").is_file() else root / episode_name(args.episode)
     if not (episode / "meta.json").is_file():
         raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
+    check_apart(args.out, root, episode)
     check_output_dir(args.out, args.overwrite)
     meta = json.loads((episode / "meta.json").read_text())
     with tqdm(total=len(meta["cameras"]) * int(meta["frames"]), desc="export", unit="image", file=sys.stderr,
@@ -48,3 +49,20 @@ def run(args) -> int:
     print(f"wrote {episode} as WILDTRACK layout{' (undistorted)' if args.undistort else ''} to {args.out}",
           file=sys.stderr)
     return 0
+
+
+def check_apart(out: str, *sources: Path) -> None:
+    """Refuse an OUT that is a source folder, lies inside one or holds one.
+
+    Inside the dataset, the export's files would make an episode fail its checksums (and
+    ``--resume`` delete it); holding it, ``--overwrite`` would delete the dataset.
+    """
+    o = Path(out).resolve()
+    for src in sources:
+        s = src.resolve()
+        if o == s:
+            raise ValueError(f"OUT: {out} is DIR {src}; choose a folder outside the dataset")
+        if s in o.parents:
+            raise ValueError(f"OUT: {out} is inside DIR {src}; choose a folder outside the dataset")
+        if o in s.parents:
+            raise ValueError(f"OUT: {out} holds DIR {src}; choose a folder outside the dataset")
