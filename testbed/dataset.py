@@ -12,26 +12,20 @@
     DIR/people.csv               frame, person_id, x, y, radius, height (metres, world)
     DIR/meta.json                seed, scene, frame count, dt, package versions
 
-Camera numbers NN count from 01; frame numbers NNNNNN from 000000. A
-:class:`DatasetWriter` writes into a temporary folder next to DIR and renames it into
-place on success, so a half-written DIR never exists.
+Camera numbers NN count from 01; frame numbers NNNNNN from 000000. Episodes are written
+by :func:`testbed.episodes.render_episode` into a temporary folder and renamed into place
+when complete, so a half-written episode never exists.
 """
 
 from __future__ import annotations
 
-import csv
-import json
 import os
-import shutil
 from pathlib import Path
-from typing import Self
 
 import cv2
 import numpy as np
 
-from pipeline.files import temp_folder
 from scene.camera import Camera
-from testbed.png import write_png
 
 
 def frame_name(index: int) -> str:
@@ -80,69 +74,6 @@ def check_output_dir(out: str | os.PathLike, overwrite: bool) -> Path:
         raise FileExistsError(f"--out: {out} exists and is not empty; choose another directory "
                               "or pass --overwrite to replace it")
     return out
-
-
-class DatasetWriter:
-    """Writes one render dataset into a temporary sibling of ``out``, then renames it.
-
-    Use as a context manager: on success the temporary folder replaces ``out``; on an
-    exception it is removed and ``out`` is left as it was.
-    """
-
-    def __init__(self, out: str | os.PathLike, cameras, overwrite: bool = False):
-        self.out = check_output_dir(out, overwrite)
-        self.cameras = tuple(cameras)
-        self.out.parent.mkdir(parents=True, exist_ok=True)
-        self.tmp = temp_folder(self.out.parent, f".{self.out.name}.")
-        for sub in ("calibration", "background"):
-            (self.tmp / sub).mkdir()
-        for c in self.cameras:
-            (self.tmp / "frames" / c.name).mkdir(parents=True)
-            (self.tmp / "masks" / c.name).mkdir(parents=True)
-            write_calibration(self.tmp / "calibration" / f"{c.name}.yaml", c)
-        self._people = []
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is not None:
-            shutil.rmtree(self.tmp, ignore_errors=True)
-            return
-        self._finish()
-
-    def write_background(self, rgb: np.ndarray) -> None:
-        """rgb : (n_cams, H, W, 3) uint8, one image per camera of the writer."""
-        for c, img in zip(self.cameras, rgb, strict=True):
-            write_png(self.tmp / "background" / f"{c.name}.png", img)
-
-    def write_frame(self, index: int, rgb: np.ndarray, labels: np.ndarray, positions_xy: np.ndarray,
-                    radius: float, height: float) -> None:
-        """Frame ``index``: rgb (n_cams, H, W, 3) uint8, labels (n_cams, H, W) uint8,
-        positions_xy (m, 2) metres world frame."""
-        name = frame_name(index)
-        for c, img, lab in zip(self.cameras, rgb, labels, strict=True):
-            write_png(self.tmp / "frames" / c.name / name, img)
-            write_png(self.tmp / "masks" / c.name / name, lab)
-        for pid, (x, y) in enumerate(np.asarray(positions_xy, float)):
-            self._people.append((index, pid, repr(float(x)), repr(float(y)), radius, height))
-
-    def write_meta(self, meta: dict) -> None:
-        (self.tmp / "meta.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
-
-    def _finish(self) -> None:
-        with open(self.tmp / "people.csv", "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(["frame", "person_id", "x", "y", "radius", "height"])
-            w.writerows(self._people)
-        if self.out.exists():
-            old = self.out.with_name(f".{self.out.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            self.out.rename(old)
-            self.tmp.rename(self.out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            self.tmp.rename(self.out)
 
 
 def read_people(path: str | os.PathLike) -> np.ndarray:

@@ -36,7 +36,8 @@ import numpy as np
 
 from pipeline.files import temp_folder
 from testbed.checksum import ALGORITHM, file_digest
-from testbed.dataset import frame_name, write_calibration, write_png
+from testbed.dataset import frame_name, write_calibration
+from testbed.png import write_png
 
 #: Formats of the RGB frames: PNG per frame, or one lossless FFV1 video per camera.
 FORMATS = ("png", "video")

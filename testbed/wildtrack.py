@@ -40,7 +40,8 @@ import cv2
 import numpy as np
 
 from pipeline.files import temp_folder
-from testbed.dataset import read_people, write_png
+from testbed.dataset import read_people
+from testbed.png import write_png
 
 #: Side of a ground-grid cell, metres (WILDTRACK: 2.5 cm).
 CELL = 0.025
