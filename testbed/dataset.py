@@ -20,7 +20,6 @@ when complete, so a half-written episode never exists.
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -63,17 +62,6 @@ def read_calibration(path: str | os.PathLike) -> dict:
         }
     finally:
         fs.release()
-
-
-def check_output_dir(out: str | os.PathLike, overwrite: bool) -> Path:
-    """``out`` as a Path; refuse an existing non-empty directory unless ``overwrite``."""
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise FileExistsError(f"--out: {out} exists and is not a directory")
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
-        raise FileExistsError(f"--out: {out} exists and is not empty; choose another directory "
-                              "or pass --overwrite to replace it")
-    return out
 
 
 def read_people(path: str | os.PathLike) -> np.ndarray:

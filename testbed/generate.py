@@ -93,7 +93,9 @@ def verify_episode(out: Path, entry: dict, algorithm: str = ALGORITHM) -> bool:
 
 
 def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
-    """``out`` as a Path, created and writable; refuse a non-empty one unless ``resume`` or ``overwrite``."""
+    """``out`` as a Path, created and writable; refuse a non-empty one unless ``resume`` or
+    ``overwrite``, and with them one that holds no manifest (not a dataset: its files are
+    none of ours to delete)."""
     out = Path(out)
     if resume and overwrite:
         raise ValueError("--resume and --overwrite: expected at most one of them")
@@ -106,9 +108,15 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
         probe.unlink()
     except OSError as exc:
         raise ValueError(f"--out: cannot write to {out} ({exc.strerror or exc})") from None
-    if not (resume or overwrite) and any(p.name != LOCK for p in out.iterdir()):
+    others = sorted(p.name for p in out.iterdir() if p.name != LOCK)
+    if others and not (resume or overwrite):
         raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "
                               "or --overwrite to replace it")
+    if others and MANIFEST not in others:
+        flag = "--resume" if resume else "--overwrite"
+        raise FileExistsError(f"{flag}: {out} is not a camtask render dataset (no {MANIFEST}; it holds "
+                              f"{', '.join(others[:3])}{', ...' if len(others) > 3 else ''}); empty it "
+                              "yourself or choose another folder")
     return out
 
 

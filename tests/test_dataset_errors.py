@@ -50,6 +50,19 @@ def test_non_empty_output_is_refused(tmp_path, capsys):
     assert (out / "keep.txt").read_text() == "x"
 
 
+@pytest.mark.parametrize("mode", ["--resume", "--overwrite"])
+def test_a_folder_that_is_not_a_dataset_is_neither_resumed_nor_overwritten(tmp_path, capsys, mode):
+    """--overwrite empties DIR and --resume adds episodes to it: only to a dataset (it has a manifest)."""
+    out = tmp_path / "work"
+    (out / "src").mkdir(parents=True)
+    for name in ("notes.txt", "b", "c", "d"):
+        (out / name).write_text("x")
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", mode)
+    assert code == 2 and line == (f"camtask render: error: {mode}: {out} is not a camtask render dataset (no "
+                                  "manifest.json; it holds b, c, d, ...); empty it yourself or choose another folder")
+    assert sorted(p.name for p in out.iterdir()) == ["b", "c", "d", "notes.txt", "src"]
+
+
 def test_unreachable_scheduler(tmp_path, capsys):
     code, line = run(capsys, "lab", "--out", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:9")
     assert code == 2 and "cannot reach a Dask scheduler" in line

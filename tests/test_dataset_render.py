@@ -479,3 +479,14 @@ def test_datasets_and_exports_get_the_permissions_of_the_umask(tmp_path):
         assert "data/manifest.json" in modes or "wild/grid.json" in modes
         wrong = {k: oct(m) for k, m in modes.items() if m != (0o755 if (tmp_path / k).is_dir() else 0o644)}
         assert wrong == {}
+
+
+def test_overwrite_replaces_a_dataset(dataset, tmp_path):
+    out = tmp_path / "data"
+    shutil.copytree(dataset, out)
+    assert main(["render", "lab", "--frames", "1", "--seed", "5", "--cameras", "2", "--out", str(out), "--workers", "0",
+                 "--overwrite"]) == 0
+    m = json.loads((out / "manifest.json").read_text())
+    assert [e["name"] for e in m["episodes"]] == ["episode_0000"] and m["config"]["seed"] == 5
+    assert sorted(p.name for p in out.iterdir()) == ["episode_0000", "manifest.json", "run_info.json"]
+    assert main(["verify", str(out)]) == 0

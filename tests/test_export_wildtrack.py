@@ -56,6 +56,14 @@ def test_export_wildtrack(tmp_path):
         assert K.shape == (3, 3) and dist.shape == (1, 5) and rvec.shape == tvec.shape == (3, 1)
     assert position_id([[0.0, 0.0]], 269).tolist() == [0]
     assert main(["export", "wildtrack", str(data), str(out)]) == 2          # OUT exists
+    before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    (out / "stale.txt").write_text("x")
+    assert main(["export", "wildtrack", str(data), str(out), "--overwrite"]) == 0   # an earlier export: replaced
+    assert {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("x")
+    assert main(["export", "wildtrack", str(data), str(tmp_path / "mine"), "--overwrite"]) == 2  # not an export
+    assert [p.name for p in (tmp_path / "mine").iterdir()] == ["notes.txt"]
     assert main(["export", "wildtrack", str(data), str(tmp_path / "x"), "--episode", "5"]) == 2
 
 

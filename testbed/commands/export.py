@@ -30,7 +30,6 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from testbed.dataset import check_output_dir
     from testbed.episodes import episode_name
     from testbed.wildtrack import export_wildtrack
 
@@ -41,7 +40,7 @@ def run(args) -> int:
     if not (episode / "meta.json").is_file():
         raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
     check_apart(args.out, root, episode)
-    check_output_dir(args.out, args.overwrite)
+    check_out(args.out, args.overwrite)
     meta = json.loads((episode / "meta.json").read_text())
     with tqdm(total=len(meta["cameras"]) * int(meta["frames"]), desc="export", unit="image", file=sys.stderr,
               dynamic_ncols=True) as bar:
@@ -66,3 +65,19 @@ def check_apart(out: str, *sources: Path) -> None:
             raise ValueError(f"OUT: {out} is inside DIR {src}; choose a folder outside the dataset")
         if o in s.parents:
             raise ValueError(f"OUT: {out} holds DIR {src}; choose a folder outside the dataset")
+
+
+def check_out(out: str, overwrite: bool) -> None:
+    """Refuse an OUT that is a file, or a non-empty folder unless ``overwrite`` and it is an
+    earlier export (it holds grid.json): anything else in it is none of ours to delete."""
+    o = Path(out)
+    if o.exists() and not o.is_dir():
+        raise FileExistsError(f"OUT: {out} exists and is not a directory")
+    others = sorted(p.name for p in o.iterdir()) if o.is_dir() else []
+    if others and not overwrite:
+        raise FileExistsError(f"OUT: {out} exists and is not empty; choose another directory "
+                              "or pass --overwrite to replace an earlier export")
+    if others and "grid.json" not in others:
+        raise FileExistsError(f"--overwrite: {out} is not an export of camtask (no grid.json; it holds "
+                              f"{', '.join(others[:3])}{', ...' if len(others) > 3 else ''}); empty it "
+                              "yourself or choose another folder")
