@@ -60,6 +60,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, UsageError, FileNotFoundError, FileExistsError) as exc:
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:                  # the machine, not the input: a full disk, a lost mount
+        print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print(f"camtask {args.command}: interrupted", file=sys.stderr)
         return 130

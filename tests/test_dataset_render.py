@@ -203,6 +203,31 @@ def test_a_failure_mid_episode_leaves_nothing(tmp_path, monkeypatch, overlap):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_full_disk_mid_run_is_one_line_and_keeps_the_finished_episodes(tmp_path, monkeypatch, capsys):
+    from testbed import episodes
+
+    real = episodes.write_png
+
+    def failing(path, image):
+        if "episode_0001" in str(path):
+            raise OSError(f"cannot write {path}: No space left on device")
+        return real(path, image)
+
+    monkeypatch.setattr(episodes, "write_png", failing)
+    out = tmp_path / "data"
+    assert main(["render", "lab", "--episodes", "3", "--frames", "1", "--cameras", "2", "--out", str(out),
+                 "--workers", "0"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith("camtask render: error: cannot write ") and err.endswith(
+        f"No space left on device; stopped with 1 of 3 episodes finished, listed in {out / 'manifest.json'} "
+        "(--resume finishes the run)")
+    assert sorted(p.name for p in out.iterdir()) == ["episode_0000", "manifest.json", "run_info.json"]
+    monkeypatch.setattr(episodes, "write_png", real)
+    assert main(["render", "lab", "--episodes", "3", "--frames", "1", "--cameras", "2", "--out", str(out),
+                 "--workers", "0", "--resume"]) == 0
+    assert main(["verify", str(out)]) == 0
+
+
 def test_resume_redoes_only_unfinished_episodes(dataset, tmp_path):
     out = tmp_path / "killed"
     shutil.copytree(dataset, out)

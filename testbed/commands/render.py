@@ -112,12 +112,14 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     from tqdm import tqdm
 
     from testbed.generate import (
+        MANIFEST,
         check_space,
         check_worker_versions,
         estimate_bytes,
         free_bytes,
         generate,
         prepare_output,
+        read_manifest,
         remove_unlisted,
         size_text,
     )
@@ -146,6 +148,12 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
                         "progress": "frames, per frame in-process, polled from temporary folders on Dask"}
                 started = True
                 done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
+    except OSError as exc:                            # a full disk, a lost mount: not a bug, one line
+        if not started:
+            raise
+        finished = len((read_manifest(out) or {}).get("episodes", []))
+        raise OSError(f"{exc}; stopped with {finished} of {args.episodes} episodes finished, listed in "
+                      f"{out / MANIFEST} (--resume finishes the run)") from None
     finally:
         if started and args.scheduler is None and workers:
             # the local workers have stopped: drop episodes they finished after the manifest's
