@@ -115,9 +115,13 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
     if others and MANIFEST not in others:
         flag = "--resume" if resume else "--overwrite"
         raise FileExistsError(f"{flag}: {out} is not a camtask render dataset (no {MANIFEST}; it holds "
-                              f"{', '.join(others[:3])}{', ...' if len(others) > 3 else ''}); empty it "
-                              "yourself or choose another folder")
+                              f"{first_names(others)}); empty it yourself or choose another folder")
     return out
+
+
+def first_names(names: list[str], n: int = 3) -> str:
+    """``"a, b, c, ..."``: the first ``n`` of ``names`` for a one-line message."""
+    return ", ".join(names[:n]) + (", ..." if len(names) > n else "")
 
 
 #: Bytes on disk per camera frame, as a fraction of its raw RGB size (W x H x 3): the noisy
