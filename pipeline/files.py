@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import secrets
+from collections.abc import Iterable
 from pathlib import Path
 
 #: Attempts at an unused random name before giving up (each has 2**48 choices).
@@ -33,14 +34,15 @@ def temp_folder(parent: str | os.PathLike, prefix: str, suffix: str = ".tmp") ->
     return _create(Path(parent), prefix, suffix, Path.mkdir)[0]
 
 
-def write_atomic(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and ``os.replace``."""
+def write_atomic(path: str | os.PathLike, data: bytes | Iterable[bytes]) -> None:
+    """Write ``data`` (bytes, or pieces of them in order) to ``path`` through a temporary
+    file in the same folder and ``os.replace``."""
     path = Path(path)
     tmp, fd = _create(path.parent, f".{path.name}.", ".tmp",
                       lambda p: os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
     try:
         with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
+            fh.write(data) if isinstance(data, bytes | bytearray | memoryview) else fh.writelines(data)
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)

@@ -10,7 +10,8 @@
     DIR/episode_NNNN/          one episode (testbed.episodes, docs/dataset.md)
 
 The manifest is written before the first episode (with none listed) and rewritten
-atomically (temporary file + os.replace) after each finished episode; it lists episodes
+atomically (temporary file + os.replace) as episodes finish and at the end of the run
+(:class:`ManifestWriter`); it lists episodes
 in index order with sorted keys, so two runs with the same arguments give the same
 manifest whatever the worker count or completion order.
 """
@@ -61,6 +62,63 @@ def read_manifest(out: Path) -> dict | None:
 def manifest(config: EpisodeConfig, episodes: int, entries: dict[int, dict]) -> dict:
     return {"format_version": FORMAT_VERSION, "checksum": ALGORITHM, "episodes_planned": episodes,
             "config": config.to_dict(), "episodes": [entries[i] for i in sorted(entries)]}
+
+
+class ManifestWriter:
+    """``DIR/manifest.json`` of a run, rewritten atomically as its episodes finish.
+
+    The bytes are those of :func:`write_json_atomic` of :func:`manifest`, but each entry is
+    serialised once, when it is added: an entry lists every file of its episode (~14,400
+    for 300 frames of 16 cameras, ~1.4 MB of JSON), so serialising the whole manifest after
+    every episode grew with the square of the episode count. And after an episode the file
+    is rewritten only once the time since the last rewrite is ``PACE`` times what that
+    rewrite took: at most ~1/PACE of the run goes to the manifest (for small manifests that
+    is after every episode). :meth:`flush` writes whatever is not yet on disk.
+    """
+
+    #: Rewrite no sooner than this many times the last rewrite's duration after it.
+    PACE = 20.0
+
+    def __init__(self, out: Path, config: EpisodeConfig, episodes: int, entries: dict[int, dict],
+                 on_disk: bool = False):
+        """entries : the finished episodes so far; on_disk : the file lists them already."""
+        self.path = Path(out) / MANIFEST
+        head = json.dumps(manifest(config, episodes, {}), indent=1, sort_keys=True) + "\n"
+        self.before, self.after = (x.encode() for x in head.split('"episodes": []', 1))
+        self.entries = {i: self._entry_bytes(e) for i, e in entries.items()}
+        self.unwritten = not on_disk
+        self.ready_at = 0.0                       # perf_counter time from which a rewrite is due
+
+    @staticmethod
+    def _entry_bytes(entry: dict) -> bytes:
+        """``entry`` as it stands in the manifest, two levels deep (keys at 3 spaces)."""
+        return json.dumps(entry, indent=1, sort_keys=True).replace("\n", "\n  ").encode()
+
+    def chunks(self) -> list[bytes]:
+        """The file's bytes, in pieces (the entries are not copied into one string)."""
+        if not self.entries:
+            return [self.before, b'"episodes": []', self.after]
+        body = [x for i in sorted(self.entries) for x in (b",\n  ", self.entries[i])]
+        return [self.before, b'"episodes": [\n  ', *body[1:], b"\n ]", self.after]
+
+    def add(self, entry: dict) -> None:
+        """List a finished episode; rewrite the file when it is due."""
+        self.entries[int(entry["index"])] = self._entry_bytes(entry)
+        self.unwritten = True
+        if time.perf_counter() >= self.ready_at:
+            self.flush()
+
+    def flush(self) -> None:
+        """Write the manifest now if it lists episodes the file does not."""
+        if not self.unwritten:
+            return
+        from pipeline.files import write_atomic
+
+        start = time.perf_counter()
+        write_atomic(self.path, self.chunks())
+        end = time.perf_counter()
+        self.unwritten = False
+        self.ready_at = end + self.PACE * (end - start)
 
 
 def manifest_algorithm(m: dict) -> str:
@@ -193,7 +251,7 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
                         entry = entry | {"files": checksums(out / entry["name"])}
                     keep[int(entry["index"])] = entry
         remove_unlisted(out, keep)
-    write_json_atomic(out / MANIFEST, manifest(config, episodes, keep))
+    ManifestWriter(out, config, episodes, keep).flush()
     return keep
 
 
@@ -328,8 +386,9 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
         from the frames in the workers' temporary folders, counted at each finished episode
         and at least every 0.25 s)
     retries : Dask resubmits an episode whose worker died this many times
-    The manifest is rewritten after every finished episode; on an error, the episodes
-    finished so far stay listed and valid, and the error is re-raised. What the manifest
+    The manifest is rewritten as episodes finish (:class:`ManifestWriter`: after each one
+    while rewriting is cheap, less often as it grows) and at the end; on an error, the
+    episodes finished so far are listed and stay valid, and the error is re-raised. What the manifest
     does not list (temporary folders of dead workers) is removed when every episode has
     finished, or in-process; after an error on Dask, workers may still be writing: the
     caller calls :func:`remove_unlisted` once they have stopped.
@@ -347,12 +406,13 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     hosts: dict[str, str] = {}
     stages: dict[str, dict] = {}
     complete = False
+    listing = ManifestWriter(out, config, episodes, keep, on_disk=True)   # as prepare_output wrote it
 
     def finished(entry: dict, host: str, secs: dict) -> None:
         done[entry["index"]] = entry
         hosts[entry["name"]] = host
         stages[entry["name"]] = {k: round(v, 3) for k, v in sorted(secs.items())}
-        write_json_atomic(out / MANIFEST, manifest(config, episodes, done))
+        listing.add(entry)
 
     try:
         if client is None:
@@ -390,8 +450,12 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
             finally:
                 for f in futures:
                     f.cancel()
+        listing.flush()
         complete = True
     finally:
+        if not complete:                            # listed before anything unlisted is removed
+            with contextlib.suppress(OSError):      # (a full disk: the first error is the one to see)
+                listing.flush()
         if complete or client is None:              # else cancelled episodes may still be running
             remove_unlisted(out, done)              # temporary folders of workers that died
         info |= {"finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "episodes_done": len(done),

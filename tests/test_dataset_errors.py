@@ -150,3 +150,54 @@ def test_workers_with_other_package_versions_are_refused():
         check_worker_versions(Cluster({}, {"numpy": "1.0.0"}))
     assert str(err.value) == (f"--scheduler: worker tcp://10.0.0.1:1 has other package versions than this machine "
                               f"(numpy 1.0.0 there, {here} here); its episodes would not be the same bytes")
+
+
+def test_manifest_writer_gives_the_bytes_of_the_whole_manifest_serialised(tmp_path):
+    import json
+
+    from pipeline import load_params
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import MANIFEST, ManifestWriter, manifest
+
+    config = EpisodeConfig("lab", None, (2, 7), 4, 1, "png", load_params().to_dict())
+    entries = {i: {"index": i, "name": f"episode_{i:04d}", "seed": 1, "spawn_key": [i], "frames": 4,
+                   "files": {"a/b.png": "00ff", 'odd "name"\n\u00e9.txt': "11", "z": "22"}} for i in (3, 0, 1)}
+    for some in ({}, {0: entries[0]}, entries):
+        writer = ManifestWriter(tmp_path, config, 5, some)
+        writer.flush()
+        expected = json.dumps(manifest(config, 5, some), indent=1, sort_keys=True) + "\n"
+        assert (tmp_path / MANIFEST).read_text() == expected
+
+
+def test_manifest_writer_rewrites_no_sooner_than_its_pace_allows(tmp_path, monkeypatch):
+    """Rewrites after each episode while they are cheap; a slow one defers the next; flush catches up."""
+    import json
+
+    from testbed import generate
+    from testbed.episodes import EpisodeConfig
+
+    clock = {"now": 100.0}
+    monkeypatch.setattr(generate.time, "perf_counter", lambda: clock["now"])
+    real = generate.ManifestWriter.chunks
+
+    def slow_chunks(self):                        # every rewrite takes 1 s of the fake clock
+        clock["now"] += 1.0
+        return real(self)
+
+    monkeypatch.setattr(generate.ManifestWriter, "chunks", slow_chunks)
+    writer = generate.ManifestWriter(tmp_path, EpisodeConfig("lab", None, None, 1, 0), 9, {})
+    listed = lambda: [e["index"] for e in json.loads((tmp_path / "manifest.json").read_text())["episodes"]]
+    entry = lambda i: {"index": i, "name": f"episode_{i:04d}", "files": {}}
+    writer.add(entry(0))                          # nothing written yet: due at once
+    assert listed() == [0]
+    clock["now"] += writer.PACE - 0.5             # not yet PACE x 1 s since then
+    writer.add(entry(1))
+    assert listed() == [0]
+    clock["now"] += 0.5
+    writer.add(entry(2))
+    assert listed() == [0, 1, 2]
+    writer.add(entry(3))
+    writer.flush()
+    assert listed() == [0, 1, 2, 3]
+    writer.flush()                                # nothing new: not rewritten
+    assert clock["now"] == 100.0 + 1 + writer.PACE + 1 + 1
