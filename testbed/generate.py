@@ -219,7 +219,8 @@ def size_text(n: float) -> str:
     return f"{n / 1e9:.3g} GB" if n >= 1e9 else f"{n / 1e6:.3g} MB"
 
 
-def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool, overwrite: bool) -> dict[int, dict]:
+def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool, overwrite: bool,
+                   verified: Callable[[int, int], None] | None = None) -> dict[int, dict]:
     """Check and prepare ``out``; return the finished episodes to keep (index -> entry).
 
     Without ``resume`` or ``overwrite`` an existing non-empty ``out`` is refused; with
@@ -230,6 +231,9 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     kept episodes is written (none on a fresh run: a run stopped before its first
     episode still names its arguments). Raises ValueError / FileExistsError before any
     work.
+
+    verified : called as ``verified(files, total)`` after each listed episode is checked
+        on resume (``files`` of the ``total`` listed), for a progress bar
     """
     out = check_out(out, resume, overwrite)
     existing = [p for p in out.iterdir() if p.name != LOCK]     # the lock: this run's own
@@ -244,12 +248,16 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
                 raise ValueError(f"--resume: {out / MANIFEST} was written with other arguments "
                                  f"({_diff(old, config, episodes)}); use --overwrite to start again")
             algorithm = manifest_algorithm(old)
-            for entry in old.get("episodes", []):
+            listed = old.get("episodes", [])
+            total = sum(len(e["files"]) for e in listed)
+            for entry in listed:
                 if verify_episode(out, entry, algorithm):
                     check_same_scene(out, entry, config)
                     if algorithm != ALGORITHM:          # an older manifest: its episodes' checksums renewed
                         entry = entry | {"files": checksums(out / entry["name"])}
                     keep[int(entry["index"])] = entry
+                if verified is not None:
+                    verified(len(entry["files"]), total)
         remove_unlisted(out, keep)
     ManifestWriter(out, config, episodes, keep).flush()
     return keep

@@ -250,6 +250,21 @@ def test_resume_redoes_only_unfinished_episodes(dataset, tmp_path):
                  "--out", str(out), "--workers", "0", "--resume"]) == 2
 
 
+def test_resume_reports_its_verification_per_episode(dataset, tmp_path):
+    from pipeline import load_params
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import prepare_output, read_manifest
+
+    out = tmp_path / "data"
+    shutil.copytree(dataset, out)
+    m = read_manifest(out)
+    calls = []
+    config = EpisodeConfig("lab", None, (2, 7, 11), 2, 4, "png", load_params().to_dict())   # as ARGS
+    keep = prepare_output(out, config, 2, True, False, lambda files, total: calls.append((files, total)))
+    sizes = [len(e["files"]) for e in m["episodes"]]
+    assert sorted(keep) == [0, 1] and calls == [(n, sum(sizes)) for n in sizes]
+
+
 def test_resume_keeps_the_episodes_of_a_sha256_manifest(dataset, tmp_path):
     """A manifest of format 1 (sha256, no ``checksum`` key): its intact episodes are kept, their checksums renewed."""
     out = tmp_path / "old"
@@ -424,7 +439,7 @@ def test_resume_refuses_a_scene_file_edited_since(tmp_path, capsys):
     scene.write_text(text.replace("noise_std: 2.0", "noise_std: 3.0"))
     capsys.readouterr()
     assert main(argv + ["--resume"]) == 2
-    err = capsys.readouterr().err.strip()
+    err = capsys.readouterr().err.strip().splitlines()[-1]       # after the bar of the episode verified
     assert err == (f"camtask render: error: --resume: {scene} is not the scene episode_0000 was rendered from "
                    "(its meta.json's scene_yaml); restore it, or use --overwrite to start again")
     assert (out / "manifest.json").read_bytes() == m and (out / "episode_0000").is_dir()

@@ -130,7 +130,18 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
         with open_client(workers, args.scheduler) as client:
             if args.scheduler is not None:
                 check_worker_versions(client)
-            keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite)
+            bars = []                                 # resuming reads back every kept episode
+
+            def verified(files: int, total: int) -> None:
+                if not bars:
+                    bars.append(tqdm(total=total, desc="verify", unit="file", file=sys.stderr, dynamic_ncols=True))
+                bars[0].update(files)
+
+            try:
+                keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite, verified)
+            finally:
+                for bar in bars:
+                    bar.close()
             todo = args.episodes - len(keep)
             if todo == 0:
                 print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
