@@ -173,13 +173,18 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
     if others and MANIFEST not in others:
         flag = "--resume" if resume else "--overwrite"
         raise FileExistsError(f"{flag}: {out} is not a camtask render dataset (no {MANIFEST}; it holds "
-                              f"{first_names(others)}); empty it yourself or choose another folder")
+                              f"{names(others)}); empty it yourself or choose another folder")
     return out
 
 
-def first_names(names: list[str], n: int = 3) -> str:
-    """``"a, b, c, ..."``: the first ``n`` of ``names`` for a one-line message."""
-    return ", ".join(names[:n]) + (", ..." if len(names) > n else "")
+def names(paths: list[str], most: int = 3) -> str:
+    """``a, b, c`` or ``a, b, c and 4 more``, for one-line messages.
+
+    >>> names(["a", "b"]), names(list("abcde"))
+    ('a, b', 'a, b, c and 2 more')
+    """
+    shown = ", ".join(paths[:most])
+    return shown if len(paths) <= most else f"{shown} and {len(paths) - most} more"
 
 
 #: Bytes on disk per camera frame, as a fraction of its raw RGB size (W x H x 3): the noisy

@@ -59,7 +59,7 @@ def test_a_folder_that_is_not_a_dataset_is_neither_resumed_nor_overwritten(tmp_p
         (out / name).write_text("x")
     code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", mode)
     assert code == 2 and line == (f"camtask render: error: {mode}: {out} is not a camtask render dataset (no "
-                                  "manifest.json; it holds b, c, d, ...); empty it yourself or choose another folder")
+                                  "manifest.json; it holds b, c, d and 2 more); empty it yourself or choose another folder")
     assert sorted(p.name for p in out.iterdir()) == ["b", "c", "d", "notes.txt", "src"]
 
 

@@ -70,7 +70,7 @@ def check_apart(out: str, *sources: Path) -> None:
 def check_out(out: str, overwrite: bool) -> None:
     """Refuse an OUT that is a file, or a non-empty folder unless ``overwrite`` and it is an
     earlier export (it holds grid.json): anything else in it is none of ours to delete."""
-    from testbed.generate import first_names
+    from testbed.generate import names
 
     o = Path(out)
     if o.exists() and not o.is_dir():
@@ -81,4 +81,4 @@ def check_out(out: str, overwrite: bool) -> None:
                               "or pass --overwrite to replace an earlier export")
     if others and "grid.json" not in others:
         raise FileExistsError(f"--overwrite: {out} is not an export of camtask (no grid.json; it holds "
-                              f"{first_names(others)}); empty it yourself or choose another folder")
+                              f"{names(others)}); empty it yourself or choose another folder")

@@ -24,16 +24,6 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def names(paths: list[str], most: int = 3) -> str:
-    """``a, b, c`` or ``a, b, c and 4 more``.
-
-    >>> names(["a", "b"]), names(list("abcde"))
-    ('a, b', 'a, b, c and 2 more')
-    """
-    shown = ", ".join(paths[:most])
-    return shown if len(paths) <= most else f"{shown} and {len(paths) - most} more"
-
-
 def run(args) -> int:
     from tqdm import tqdm
 
@@ -41,6 +31,7 @@ def run(args) -> int:
         MANIFEST,
         episode_problems,
         manifest_algorithm,
+        names,
         read_manifest,
         unlisted,
     )
