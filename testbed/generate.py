@@ -27,6 +27,7 @@ import platform
 import shutil
 import socket
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -391,7 +392,8 @@ def version_changes(a: dict, b: dict, a_name: str, b_name: str) -> str:
 def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, dict], client=None,
              progress: Callable[[int], None] | None = None, retries: int = 2,
              run_info: dict | None = None) -> dict[int, dict]:
-    """Render the episodes not in ``keep`` into ``out``; return all finished entries.
+    """Render the episodes not in ``keep`` into ``out``; return all finished entries (those
+    of the episodes rendered here without their ``files``, which only the manifest keeps).
 
     client : a ``distributed.Client`` or None (in this process, one episode after the other,
         each writing and processing its frames on a second thread when there is a second core)
@@ -422,7 +424,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     listing = ManifestWriter(out, config, episodes, keep, on_disk=True)   # as prepare_output wrote it
 
     def finished(entry: dict, host: str, secs: dict) -> None:
-        done[entry["index"]] = entry
+        done[entry["index"]] = {k: v for k, v in entry.items() if k != "files"}   # the manifest has them
         hosts[entry["name"]] = host
         stages[entry["name"]] = {k: round(v, 3) for k, v in sorted(secs.items())}
         listing.add(entry)
@@ -435,10 +437,19 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                 entry = render_episode(config, i, str(out), progress, secs, overlap=overlap)
                 finished(entry, socket.gethostname(), secs)
         else:
-            from distributed import wait
+            ready = threading.Event()               # set as each episode's task ends
 
-            futures = [client.submit(_remote_episode, config, i, str(out), key=f"episode-{i}-{os.getpid()}-{time.time_ns()}",
-                                     pure=False, retries=retries) for i in todo]
+            def submit(i: int):
+                fut = client.submit(_remote_episode, config, i, str(out), pure=False, retries=retries,
+                                    key=f"episode-{i}-{os.getpid()}-{time.time_ns()}")
+                fut.add_done_callback(lambda _: ready.set())
+                return fut
+
+            # index -> future of the episodes not yet listed; a listed one is dropped at once, so
+            # the cluster lets go of its result (a checksum per file: ~3 MB for 300 frames). No
+            # distributed.wait(timeout=...): its TimeoutError's traceback kept every future it
+            # was given alive until the garbage collector broke the cycle.
+            pending = {i: submit(i) for i in todo}
             shown = dict.fromkeys(todo, 0)          # frames counted per episode so far
 
             def show(index: int, frames: int) -> None:
@@ -447,21 +458,20 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                     shown[index] = frames
 
             try:
-                pending = list(futures)
                 while pending:
-                    for fut in [f for f in pending if f.done()]:
-                        entry, host, secs = fut.result()     # re-raises the episode's error
+                    ready.clear()                   # an episode ending from here on wakes the wait below
+                    for index in [i for i, f in pending.items() if f.done()]:
+                        entry, host, secs = pending[index].result()    # re-raises the episode's error
                         finished(entry, host, secs)
-                        show(entry["index"], entry["frames"])
-                        pending.remove(fut)
+                        del pending[index]
+                        show(index, entry["frames"])
                     for index, frames in (frames_in_progress(out, config) if progress else {}).items():
                         if index in shown:
                             show(index, min(frames, config.frames - 1))
                     if pending:                     # wake at the next finished episode, or in 0.25 s
-                        with contextlib.suppress(TimeoutError):
-                            wait(pending, timeout=0.25, return_when="FIRST_COMPLETED")
+                        ready.wait(0.25)
             finally:
-                for f in futures:
+                for f in pending.values():
                     f.cancel()
         listing.flush()
         complete = True
