@@ -230,8 +230,9 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     """Check and prepare ``out``; return the finished episodes to keep (index -> entry).
 
     Without ``resume`` or ``overwrite`` an existing non-empty ``out`` is refused; with
-    ``overwrite`` it is emptied; with ``resume`` the manifest's episodes whose files
-    verify are kept and everything else (unlisted or corrupt episode folders, temporary
+    ``overwrite`` it is emptied; with ``resume`` (the same arguments, or more episodes:
+    episode i depends only on the seed and i, so a run can be extended) the manifest's
+    episodes whose files verify are kept and everything else (unlisted or corrupt episode folders, temporary
     folders of killed runs) is removed; a kept episode rendered from another scene text
     than ``config``'s is refused (:func:`check_same_scene`). Then the manifest of the
     kept episodes is written (none on a fresh run: a run stopped before its first
@@ -250,9 +251,13 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     elif resume and existing:
         old = read_manifest(out)
         if old is not None:
-            if old.get("config") != config.to_dict() or old.get("episodes_planned") != episodes:
+            if old.get("config") != config.to_dict():
                 raise ValueError(f"--resume: {out / MANIFEST} was written with other arguments "
-                                 f"({_diff(old, config, episodes)}); use --overwrite to start again")
+                                 f"({_diff(old, config)}); use --overwrite to start again")
+            planned = int(old.get("episodes_planned", 0))
+            if episodes < planned:                  # more is fine: episode i depends on the seed and i only
+                raise ValueError(f"--resume: --episodes {episodes}, but the run planned {planned}: it can "
+                                 "extend a run, not shrink it")
             algorithm = manifest_algorithm(old)
             listed = old.get("episodes", [])
             total = sum(len(e["files"]) for e in listed)
@@ -345,9 +350,9 @@ def remove_unlisted(out: Path, entries: dict[int, dict] | None = None) -> None:
         shutil.rmtree(p, ignore_errors=True)
 
 
-def _diff(old: dict, config: EpisodeConfig, episodes: int) -> str:
-    new = config.to_dict() | {"episodes": episodes}
-    was = dict(old.get("config") or {}) | {"episodes": old.get("episodes_planned")}
+def _diff(old: dict, config: EpisodeConfig) -> str:
+    new = config.to_dict()
+    was = dict(old.get("config") or {})
     keys = sorted(k for k in set(new) | set(was) if new.get(k) != was.get(k))
     return ", ".join(f"{k}: {was.get(k)!r} then, {new.get(k)!r} now" for k in keys)
 

@@ -250,6 +250,21 @@ def test_resume_redoes_only_unfinished_episodes(dataset, tmp_path):
                  "--out", str(out), "--workers", "0", "--resume"]) == 2
 
 
+def test_resume_with_more_episodes_extends_a_run_to_the_bytes_of_a_longer_one(dataset, tmp_path, capsys):
+    out, fresh = tmp_path / "extended", tmp_path / "fresh"
+    shutil.copytree(dataset, out)
+    more = [a if a != "2" or i != 3 else "3" for i, a in enumerate(ARGS)]       # --episodes 3
+    assert more[2:4] == ["--episodes", "3"]
+    assert main(more + ["--out", str(out), "--workers", "0", "--resume"]) == 0
+    assert main(more + ["--out", str(fresh), "--workers", "0"]) == 0
+    assert files_of(out) == files_of(fresh)
+    capsys.readouterr()
+    fewer = more[:3] + ["1"] + more[4:]
+    assert main(fewer + ["--out", str(out), "--workers", "0", "--resume"]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == (
+        "camtask render: error: --resume: --episodes 1, but the run planned 3: it can extend a run, not shrink it")
+
+
 def test_resume_reports_its_verification_per_episode(dataset, tmp_path):
     from pipeline import load_params
     from testbed.episodes import EpisodeConfig
