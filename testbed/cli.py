@@ -29,6 +29,11 @@ class UsageError(Exception):
     """A user mistake on the command line, printed as one line with exit code 2."""
 
 
+class RunError(Exception):
+    """A run stopped by the machine (a full disk, a worker that kept dying), printed as one
+    line with exit code 1."""
+
+
 #: The largest ``--seed``: NumPy's SeedSequence takes no negative integer, Optuna's
 #: samplers (``camtask tune``) none from 2**32 up; every command takes the same range.
 SEED_MAX = 2**32 - 1
@@ -60,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, UsageError, FileNotFoundError, FileExistsError) as exc:
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 2
-    except OSError as exc:                  # the machine, not the input: a full disk, a lost mount
+    except (OSError, RunError) as exc:      # the machine, not the input: a full disk, a lost mount
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
@@ -69,4 +74,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    # python -m testbed.cli: run the imported module's main, so that the exception classes the
+    # commands raise (testbed.cli.RunError, UsageError) are the ones it catches
+    from testbed.cli import main as _main
+
+    sys.exit(_main())

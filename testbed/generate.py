@@ -395,7 +395,7 @@ def version_changes(a: dict, b: dict, a_name: str, b_name: str) -> str:
 
 
 def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, dict], client=None,
-             progress: Callable[[int], None] | None = None, retries: int = 2,
+             progress: Callable[[int], None] | None = None,
              run_info: dict | None = None) -> dict[int, dict]:
     """Render the episodes not in ``keep`` into ``out``; return all finished entries (those
     of the episodes rendered here without their ``files``, which only the manifest keeps).
@@ -405,7 +405,9 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     progress : called with a number of frames finished (per frame in-process; on Dask
         from the frames in the workers' temporary folders, counted at each finished episode
         and at least every 0.25 s)
-    retries : Dask resubmits an episode whose worker died this many times
+    An episode whose worker dies is rescheduled by the Dask scheduler, up to its
+    ``distributed.scheduler.allowed-failures`` (3 by default) times, after which it raises
+    ``distributed.KilledWorker``; an episode that raises stops the run, as in-process.
     The manifest is rewritten as episodes finish (:class:`ManifestWriter`: after each one
     while rewriting is cheap, less often as it grows) and at the end; on an error, the
     episodes finished so far are listed and stay valid, and the error is re-raised. What the manifest
@@ -445,7 +447,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
             ready = threading.Event()               # set as each episode's task ends
 
             def submit(i: int):
-                fut = client.submit(_remote_episode, config, i, str(out), pure=False, retries=retries,
+                fut = client.submit(_remote_episode, config, i, str(out), pure=False,
                                     key=f"episode-{i}-{os.getpid()}-{time.time_ns()}")
                 fut.add_done_callback(lambda _: ready.set())
                 return fut

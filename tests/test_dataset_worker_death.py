@@ -96,3 +96,32 @@ def test_the_cluster_lets_go_of_each_finished_episode(tmp_path):
         done = generate(config, 4, out, keep, client, progress=progress)
     assert sorted(done) == [0, 1, 2, 3] and len(held) == 4
     assert held[-1] == 0, held                       # the last one listed, none is held any more
+
+
+def test_an_episode_whose_workers_keep_dying_stops_the_run_in_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    import psutil
+
+    out = tmp_path / "data"
+    args = [sys.executable, "-m", "testbed.cli", "render", "lab", "--episodes", "3", "--frames", "6",
+            "--cameras", "2", "--seed", "3", "--workers", "1", "--out", str(out)]
+    env = os.environ | {"DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "0"}   # the first death is fatal
+    proc = subprocess.Popen(args, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.time() + 120
+    while not list(out.glob(".episode_0001.*.tmp/masks/cam02/*.png")) and time.time() < deadline:
+        time.sleep(0.02)
+    for child in psutil.Process(proc.pid).children():
+        if "spawn_main" in " ".join(child.cmdline()):      # the worker process (its nanny is in proc)
+            child.kill()
+    err = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 1, err
+    assert "Traceback" not in err, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("camtask render: error: episode 1: 1 worker process died running it (the last at "), last
+    assert last.endswith(f"stopped with 1 of 3 episodes finished, listed in {out / 'manifest.json'} "
+                         "(--resume finishes the run)"), last
+    subprocess.run(args + ["--resume"], check=True, capture_output=True, timeout=300)
+    assert [e["name"] for e in json.loads((out / "manifest.json").read_text())["episodes"]] == [
+        "episode_0000", "episode_0001", "episode_0002"]

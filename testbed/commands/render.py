@@ -111,6 +111,7 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     """The run itself, once ``out`` is checked and locked."""
     from tqdm import tqdm
 
+    from testbed.cli import RunError
     from testbed.generate import (
         MANIFEST,
         check_space,
@@ -159,12 +160,12 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
                         "progress": "frames, per frame in-process, polled from temporary folders on Dask"}
                 started = True
                 done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
-    except OSError as exc:                            # a full disk, a lost mount: not a bug, one line
-        if not started:
+    except Exception as exc:                          # a full disk, a lost mount, a worker that kept dying
+        if not started or not stopped_by_machine(exc):
             raise
         finished = len((read_manifest(out) or {}).get("episodes", []))
-        raise OSError(f"{exc}; stopped with {finished} of {args.episodes} episodes finished, listed in "
-                      f"{out / MANIFEST} (--resume finishes the run)") from None
+        raise RunError(f"{machine_error_text(exc)}; stopped with {finished} of {args.episodes} episodes finished, "
+                       f"listed in {out / MANIFEST} (--resume finishes the run)") from None
     finally:
         if started and args.scheduler is None and workers:
             # the local workers have stopped: drop episodes they finished after the manifest's
@@ -176,3 +177,24 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     print(f"wrote {new} episode{'s' * (new != 1)} x {args.frames} frames to {out} "
           f"({len(done)}/{args.episodes} finished)", file=sys.stderr)
     return 0
+
+
+def machine_error_text(exc: BaseException) -> str:
+    """One line for :func:`stopped_by_machine` errors (Dask's KilledWorker text is a paragraph)."""
+    if isinstance(exc, OSError):
+        return str(exc)
+    index = int(str(exc.task).split("-")[1])      # keys are episode-<index>-<pid>-<ns>
+    deaths = exc.allowed_failures + 1
+    return (f"episode {index}: {deaths} worker process{'es' * (deaths > 1)} died running it (the last at "
+            f"{exc.last_worker.address}; out of memory?)")
+
+
+def stopped_by_machine(exc: BaseException) -> bool:
+    """An OSError, or a Dask episode whose workers kept dying (``KilledWorker``): not a bug."""
+    if isinstance(exc, OSError):
+        return True
+    if "distributed" not in sys.modules:          # no cluster was used
+        return False
+    from distributed import KilledWorker
+
+    return isinstance(exc, KilledWorker)
