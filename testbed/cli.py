@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
+import threading
 
 #: Command modules, in the order ``camtask --help`` lists them.
 COMMANDS = (
@@ -57,9 +59,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a batch scheduler's time limit), raised where Ctrl-C would be, so a
+    run stops as cleanly: temporary folders removed, the manifest listing what finished."""
+
+
+def _terminate(signum, frame) -> None:
+    raise Terminated
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    in_main = threading.current_thread() is threading.main_thread()     # where signal handlers run
+    previous = signal.signal(signal.SIGTERM, _terminate) if in_main else None
     try:
         return int(args.func(args) or 0)
     except (ValueError, UsageError, FileNotFoundError, FileExistsError) as exc:
@@ -68,9 +81,15 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, RunError) as exc:      # the machine, not the input: a full disk, a lost mount
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 1
+    except Terminated:
+        print(f"camtask {args.command}: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         print(f"camtask {args.command}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

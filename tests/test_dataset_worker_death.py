@@ -47,7 +47,10 @@ def test_killed_worker_episode_is_redone(tmp_path):
     assert not list(out.glob(".*tmp"))
 
 
-def test_ctrl_c_stops_the_run_in_one_line_and_resume_finishes_it(tmp_path):
+@pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
+def test_ctrl_c_or_sigterm_stops_the_run_in_one_line_and_resume_finishes_it(tmp_path, how):
+    """Ctrl-C reaches the whole process group; SIGTERM (kill, a batch scheduler's time limit)
+    the client: both stop the run cleanly."""
     import subprocess
     import sys
 
@@ -64,11 +67,14 @@ def test_ctrl_c_stops_the_run_in_one_line_and_resume_finishes_it(tmp_path):
     deadline = time.time() + 120
     while not listed() and proc.poll() is None and time.time() < deadline:
         time.sleep(0.02)
-    os.killpg(proc.pid, signal.SIGINT)                     # as Ctrl-C in a terminal: every process
+    if how == "ctrl-c":
+        os.killpg(proc.pid, signal.SIGINT)                 # as Ctrl-C in a terminal: every process
+    else:
+        proc.send_signal(signal.SIGTERM)
     err = proc.communicate(timeout=120)[1]
-    assert proc.returncode == 130, err
+    assert proc.returncode == (130 if how == "ctrl-c" else 143), err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
-    assert err.rstrip().endswith("camtask render: interrupted")
+    assert err.rstrip().endswith("camtask render: " + ("interrupted" if how == "ctrl-c" else "terminated"))
     assert 1 <= len(listed()) < 4                          # finished episodes listed, not all
     # nothing else: no temporary folders, no episode that finished after the manifest's last write
     assert sorted(p.name for p in out.iterdir()) == sorted(listed() + ["manifest.json", "run_info.json"])
