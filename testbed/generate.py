@@ -387,6 +387,41 @@ def check_worker_versions(client) -> None:
                              f"({changes}); its episodes would not be the same bytes")
 
 
+def check_workers_share(client, out: Path, patience: float = 10.0) -> None:
+    """Refuse a cluster with a worker that does not see ``out`` at the same path: it would
+    write its episodes where this process never finds them. A file with a random token is
+    written into ``out`` and read back on every worker, for up to ``patience`` seconds (a
+    network file system may show a new file to other machines a little later). One line
+    naming the first such worker.
+    """
+    import secrets
+
+    folder = Path(out).absolute()
+    token = secrets.token_hex(16)
+    probe = folder / f".camtask-probe.{token[:12]}"
+    probe.write_text(token)
+    try:
+        deadline = time.monotonic() + patience
+        while True:
+            blind = sorted(w for w, seen in client.run(_read_text, str(probe)).items() if seen != token)
+            if not blind:
+                return
+            if time.monotonic() >= deadline:
+                raise ValueError(f"--scheduler: worker {blind[0]} does not see {folder}; --out must be a folder "
+                                 "that every worker shares, at the same path (a shared file system)")
+            time.sleep(0.5)
+    finally:
+        probe.unlink(missing_ok=True)
+
+
+def _read_text(path: str) -> str | None:
+    """The text of ``path`` on the worker that runs this, or None."""
+    try:
+        return Path(path).read_text()
+    except OSError:
+        return None
+
+
 def version_changes(a: dict, b: dict, a_name: str, b_name: str) -> str:
     """The packages that make the bytes whose versions differ between two :func:`versions`
     records, as ``"numpy 2.3.0 then, 2.4.6 now"`` (``a_name``, ``b_name``); "" if none."""
@@ -447,7 +482,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
             ready = threading.Event()               # set as each episode's task ends
 
             def submit(i: int):
-                fut = client.submit(_remote_episode, config, i, str(out), pure=False,
+                fut = client.submit(_remote_episode, config, i, str(out.absolute()), pure=False,
                                     key=f"episode-{i}-{os.getpid()}-{time.time_ns()}")
                 fut.add_done_callback(lambda _: ready.set())
                 return fut

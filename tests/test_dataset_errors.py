@@ -201,3 +201,22 @@ def test_manifest_writer_rewrites_no_sooner_than_its_pace_allows(tmp_path, monke
     assert listed() == [0, 1, 2, 3]
     writer.flush()                                # nothing new: not rewritten
     assert clock["now"] == 100.0 + 1 + writer.PACE + 1 + 1
+
+
+def test_workers_that_do_not_see_the_output_folder_are_refused(tmp_path):
+    from testbed.generate import _read_text, check_workers_share
+
+    class Cluster:                                  # client.run(f, *args): f's result on every worker
+        def __init__(self, *sees):
+            self.sees = sees
+
+        def run(self, fn, *args):
+            return {f"tcp://10.0.0.{i}:1": fn(*args) if sees else None for i, sees in enumerate(self.sees)}
+
+    check_workers_share(Cluster(True, True), tmp_path)
+    with pytest.raises(ValueError) as err:
+        check_workers_share(Cluster(True, False), tmp_path, patience=0.6)
+    assert str(err.value) == (f"--scheduler: worker tcp://10.0.0.1:1 does not see {tmp_path}; --out must be a "
+                              "folder that every worker shares, at the same path (a shared file system)")
+    assert list(tmp_path.iterdir()) == []           # the probe is gone either way
+    assert _read_text(str(tmp_path / "none")) is None

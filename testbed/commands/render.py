@@ -116,6 +116,7 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
         MANIFEST,
         check_space,
         check_worker_versions,
+        check_workers_share,
         estimate_bytes,
         free_bytes,
         generate,
@@ -131,6 +132,7 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
         with open_client(workers, args.scheduler) as client:
             if args.scheduler is not None:
                 check_worker_versions(client)
+                check_workers_share(client, out)
             bars = []                                 # resuming reads back every kept episode
 
             def verified(files: int, total: int) -> None:
