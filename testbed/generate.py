@@ -40,6 +40,9 @@ MANIFEST = "manifest.json"
 RUN_INFO = "run_info.json"
 #: Locked (``flock``) by the run writing DIR, deleted when it ends; see :func:`exclusive`.
 LOCK = ".camtask-render.lock"
+#: Prefix of the file :func:`check_workers_share` writes into DIR and removes (a killed run
+#: may leave one: not content).
+PROBE = ".camtask-probe."
 #: 2: BLAKE3 checksums named by ``checksum``; 1: sha256, no ``checksum`` key (still resumable).
 FORMAT_VERSION = 2
 
@@ -167,7 +170,7 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
         probe.unlink()
     except OSError as exc:
         raise ValueError(f"--out: cannot write to {out} ({exc.strerror or exc})") from None
-    others = sorted(p.name for p in out.iterdir() if p.name != LOCK)
+    others = sorted(p.name for p in out.iterdir() if p.name != LOCK and not p.name.startswith(PROBE))
     if others and not (resume or overwrite):
         raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "
                               "or --overwrite to replace it")
@@ -398,7 +401,7 @@ def check_workers_share(client, out: Path, patience: float = 10.0) -> None:
 
     folder = Path(out).absolute()
     token = secrets.token_hex(16)
-    probe = folder / f".camtask-probe.{token[:12]}"
+    probe = folder / f"{PROBE}{token[:12]}"
     probe.write_text(token)
     try:
         deadline = time.monotonic() + patience

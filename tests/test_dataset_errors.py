@@ -219,4 +219,8 @@ def test_workers_that_do_not_see_the_output_folder_are_refused(tmp_path):
     assert str(err.value) == (f"--scheduler: worker tcp://10.0.0.1:1 does not see {tmp_path}; --out must be a "
                               "folder that every worker shares, at the same path (a shared file system)")
     assert list(tmp_path.iterdir()) == []           # the probe is gone either way
+    from testbed.generate import PROBE, check_out
+
+    (tmp_path / f"{PROBE}0123").write_text("left by a killed run")
+    check_out(tmp_path)                             # not content: not "exists and is not empty"
     assert _read_text(str(tmp_path / "none")) is None
