@@ -8,7 +8,9 @@
          "views": [{"viewNum": v, "xmin": .., "ymin": .., "xmax": .., "ymax": ..}, ...]}
     OUT/calibrations/intrinsic_zero/intr_C<n>.xml   cv2.FileStorage: camera_matrix, distortion_coefficients
                                                     (zeros with ``undistort``)
-    OUT/calibrations/extrinsic/extr_C<n>.xml        cv2.FileStorage: rvec, tvec (world -> camera, metres)
+    OUT/calibrations/extrinsic/extr_C<n>.xml        rvec, tvec (world -> camera, metres) as WILDTRACK
+                                                    writes them: one line of numbers each, a
+                                                    cv2.FileStorage sequence
     OUT/grid.json                                   the ground grid below, and view -> camera number
 
 Ground grid: origin at the world origin (the room corner), cells of ``CELL`` = 0.025 m
@@ -78,6 +80,19 @@ def boxes(labels: np.ndarray, people: int) -> np.ndarray:
     return out
 
 
+def _write_extrinsic(path: Path, rvec: np.ndarray, tvec: np.ndarray) -> None:
+    """WILDTRACK's extrinsic file: ``<rvec>a b c</rvec>`` and ``<tvec>..</tvec>`` in an
+    ``opencv_storage`` root, each one line of numbers split by single spaces.
+
+    cv2.FileStorage reads each as a sequence; MVDet's WILDTRACK reader parses the element's
+    text with ElementTree and ``split(' ')``. (FileStorage itself would write matrices,
+    which that reader cannot parse, and wraps long sequences over lines.)
+    """
+    line = lambda v: " ".join(repr(float(x)) for x in np.ravel(v))
+    path.write_text(f'<?xml version="1.0"?>\n<opencv_storage>\n<rvec>{line(rvec)}</rvec>\n'
+                    f"<tvec>{line(tvec)}</tvec>\n</opencv_storage>\n")
+
+
 def _write_fs(path: Path, **mats) -> None:
     fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
     try:
@@ -128,8 +143,7 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undisto
                 dist = np.zeros_like(dist)
             _write_fs(tmp / "calibrations" / "intrinsic_zero" / f"intr_C{n}.xml",
                       camera_matrix=c["K"], distortion_coefficients=dist)
-            _write_fs(tmp / "calibrations" / "extrinsic" / f"extr_C{n}.xml",
-                      rvec=c["rvec"].reshape(3, 1), tvec=c["tvec"].reshape(3, 1))
+            _write_extrinsic(tmp / "calibrations" / "extrinsic" / f"extr_C{n}.xml", c["rvec"], c["tvec"])
         with ThreadPoolExecutor(max_workers=min(default_workers(), len(numbers))) as pool:
             b = np.stack(list(pool.map(
                 lambda n: _export_camera(episode, meta, n, P, tmp / "Image_subsets" / f"C{n}", maps.get(n), progress),

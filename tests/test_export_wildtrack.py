@@ -1,13 +1,14 @@
 """camtask export wildtrack: boxes agree with the masks, calibration XML loads with cv2.FileStorage."""
 
 import json
+import xml.etree.ElementTree as ET
 
 import cv2
 import numpy as np
 import pytest
 
 from testbed.cli import main
-from testbed.dataset import read_people
+from testbed.dataset import read_calibration, read_people
 from testbed.wildtrack import CELL, boxes, position_id
 
 
@@ -54,6 +55,13 @@ def test_export_wildtrack(tmp_path):
     for n in (1, 6, 12):
         K, dist, rvec, tvec = _calibration(out, n)
         assert K.shape == (3, 3) and dist.shape == (1, 5) and rvec.shape == tvec.shape == (3, 1)
+        c = read_calibration(ep / "calibration" / f"cam{n:02d}.yaml")
+        assert np.array_equal(rvec.ravel(), c["rvec"].ravel()) and np.array_equal(tvec.ravel(), c["tvec"].ravel())
+        # as MVDet's WILDTRACK reader parses them: the element's text split on single spaces
+        root = ET.parse(out / "calibrations" / "extrinsic" / f"extr_C{n}.xml").getroot()
+        for name, value in (("rvec", rvec), ("tvec", tvec)):
+            text = root.findall(name)[0].text.lstrip().rstrip().split(" ")
+            assert np.array_equal(np.array([float(x) for x in text]), value.ravel())
     assert position_id([[0.0, 0.0]], 269).tolist() == [0]
     assert main(["export", "wildtrack", str(data), str(out)]) == 2          # OUT exists
     before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
@@ -72,7 +80,8 @@ def _calibration(out, n):
     K, dist = fs.getNode("camera_matrix").mat(), fs.getNode("distortion_coefficients").mat()
     fs.release()
     fs = cv2.FileStorage(str(out / "calibrations" / "extrinsic" / f"extr_C{n}.xml"), cv2.FILE_STORAGE_READ)
-    rvec, tvec = fs.getNode("rvec").mat(), fs.getNode("tvec").mat()
+    rvec, tvec = (np.array([[node.at(i).real()] for i in range(node.size())])   # sequences, (3, 1)
+                  for node in (fs.getNode("rvec"), fs.getNode("tvec")))
     fs.release()
     return K, dist, rvec, tvec
 
