@@ -235,8 +235,9 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     Without ``resume`` or ``overwrite`` an existing non-empty ``out`` is refused; with
     ``overwrite`` it is emptied; with ``resume`` (the same arguments, or more episodes:
     episode i depends only on the seed and i, so a run can be extended) the manifest's
-    episodes whose files verify are kept and everything else (unlisted or corrupt episode folders, temporary
-    folders of killed runs) is removed; a kept episode rendered from another scene text
+    episodes whose files verify are kept and everything else (unlisted or corrupt
+    episode folders, temporary folders of killed runs) is removed; a kept episode
+    rendered from another scene text
     than ``config``'s is refused (:func:`check_same_scene`). Then the manifest of the
     kept episodes is written (none on a fresh run: a run stopped before its first
     episode still names its arguments). Raises ValueError / FileExistsError before any

@@ -38,7 +38,8 @@ def add_parser(subparsers) -> None:
                         "0 or a single episode = in this process)")
     g.add_argument("--scheduler", help="address of an existing Dask scheduler (DIR must be shared)")
     m = p.add_mutually_exclusive_group()
-    m.add_argument("--resume", action="store_true", help="finish an interrupted run, or extend one with a larger --episodes: keep verified episodes")
+    m.add_argument("--resume", action="store_true",
+                   help="finish an interrupted run, or extend one with a larger --episodes: keep verified episodes")
     m.add_argument("--overwrite", action="store_true", help="replace an existing non-empty --out")
     p.set_defaults(func=run)
 
