@@ -97,6 +97,11 @@ class RenderDir:
         self.names = tuple(c.name for c in self.cameras)
         first = self.root / "frames" / self.names[0]
         self.frame_names = tuple(sorted(p.name for p in first.glob("*.png")))
+        video = first.with_name(f"{self.names[0]}.mkv")
+        if not self.frame_names and video.is_file():
+            raise ValueError(f"render directory: {self.root} holds its frames as video ({video.relative_to(self.root)}, "
+                             "`camtask render --format video`); this reads PNG frames: render with --format png, "
+                             "or decode the videos with testbed.lossless.read_video")
         if not self.frame_names:
             raise ValueError(f"render directory: {first} has no frames")
 

@@ -321,7 +321,7 @@ def test_verify_names_what_differs_from_the_manifest(dataset, tmp_path, capsys):
     assert "no manifest.json" in capsys.readouterr().err
 
 
-def test_video_format_is_lossless(dataset, tmp_path):
+def test_video_format_is_lossless(dataset, tmp_path, capsys):
     import cv2
 
     from testbed.lossless import read_video
@@ -337,6 +337,9 @@ def test_video_format_is_lossless(dataset, tmp_path):
             want = cv2.cvtColor(cv2.imread(str(png / "frames" / f"cam{n:02d}" / f"{f:06d}.png")), cv2.COLOR_BGR2RGB)
             np.testing.assert_array_equal(rgb, want)
     assert (ep / "masks" / "cam02" / "000001.png").read_bytes() == (png / "masks" / "cam02" / "000001.png").read_bytes()
+    capsys.readouterr()
+    assert main(["scanlines", str(ep)]) == 2                  # reads PNG frames: says so in one line
+    assert "holds its frames as video (frames/cam02.mkv" in capsys.readouterr().err
     again = tmp_path / "video2"
     assert main(ARGS + ["--out", str(again), "--workers", "0", "--format", "video", "--episodes", "1"]) == 0
     assert files_of(out) == files_of(again)
