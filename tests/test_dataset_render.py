@@ -562,3 +562,10 @@ def test_the_loading_example_of_the_docs_runs(dataset):
     assert scope["meta"]["cameras"] == [2, 7, 11] and scope["rgb"].shape == (480, 640, 3)
     assert scope["sil"].shape == (480, 640) and scope["sil"].dtype == np.uint8
     assert {"scanlines", "gt_scanlines", "bearings"} <= set(scope["scan"].files)
+
+
+def test_the_order_of_the_cameras_given_does_not_matter(dataset, tmp_path):
+    out = tmp_path / "reordered"
+    reordered = [a if a != "2,7,11" else "11,2,7" for a in ARGS]
+    assert main(reordered + ["--out", str(out), "--workers", "0"]) == 0
+    assert files_of(out) == files_of(dataset)
