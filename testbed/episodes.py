@@ -72,7 +72,8 @@ class EpisodeConfig:
 
     scene : built-in scene name or scene file path
     people : number of people, None for the scene's own
-    cameras : 1-based camera numbers, None for all
+    cameras : 1-based camera numbers, None for all; kept in number order, so the same
+        cameras given in another order are the same run (same config, same bytes)
     frames : frames per episode (>= 1)
     seed : the run's seed S
     fmt : "png" or "video"
@@ -91,6 +92,10 @@ class EpisodeConfig:
     fmt: str = "png"
     params: dict = field(default_factory=dict)
     scene_yaml: str = field(default="", repr=False)
+
+    def __post_init__(self):
+        if self.cameras is not None:
+            object.__setattr__(self, "cameras", tuple(sorted(self.cameras)))
 
     def to_dict(self) -> dict:
         return {"scene": self.scene, "people": self.people,

@@ -45,12 +45,11 @@ def add_parser(subparsers) -> None:
 
 
 def parse_cameras(text: str | None):
-    """``"5,1,3"`` -> (1, 3, 5), in number order: the same cameras in another order are the
-    same dataset (the renderer's output varied by a grey level with the order); None stays None."""
+    """``"1,3,5"`` -> (1, 3, 5); None stays None (EpisodeConfig puts them in number order)."""
     if text is None:
         return None
     try:
-        return tuple(sorted(int(x) for x in text.split(",") if x.strip()))
+        return tuple(int(x) for x in text.split(",") if x.strip())
     except ValueError:
         raise ValueError(f"--cameras: expected comma-separated camera numbers, got {text!r}") from None
 
