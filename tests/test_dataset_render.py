@@ -569,3 +569,9 @@ def test_the_order_of_the_cameras_given_does_not_matter(dataset, tmp_path):
     reordered = [a if a != "2,7,11" else "11,2,7" for a in ARGS]
     assert main(reordered + ["--out", str(out), "--workers", "0"]) == 0
     assert files_of(out) == files_of(dataset)
+
+
+def test_no_more_worker_processes_than_episodes(tmp_path):
+    out = tmp_path / "data"
+    assert main(["render", "lab", "--frames", "1", "--cameras", "2", "--workers", "6", "--out", str(out)]) == 0
+    assert json.loads((out / "run_info.json").read_text())["workers"] == 1

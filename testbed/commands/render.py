@@ -104,6 +104,8 @@ def run(args: argparse.Namespace) -> int:
         # one process per core, never more than there are episodes; one episode runs here
         workers = min(default_workers(), args.episodes)
         workers = 0 if workers == 1 else workers
+    elif workers:                                     # a worker more than episodes would only start up
+        workers = min(workers, args.episodes)
     with exclusive(out):                              # until the clean-up after the workers is done
         return _run(args, config, scene, out, workers)
 
