@@ -21,7 +21,7 @@ def test_boxes_of_a_hand_made_mask():
 
 
 @pytest.mark.render
-def test_export_wildtrack(tmp_path):
+def test_export_wildtrack(tmp_path, capsys):
     data, out = tmp_path / "data", tmp_path / "wild"
     assert main(["render", "lab", "--frames", "2", "--seed", "9", "--cameras", "1,6,12", "--out", str(data),
                  "--workers", "0"]) == 0
@@ -73,6 +73,13 @@ def test_export_wildtrack(tmp_path):
     assert main(["export", "wildtrack", str(data), str(tmp_path / "mine"), "--overwrite"]) == 2  # not an export
     assert [p.name for p in (tmp_path / "mine").iterdir()] == ["notes.txt"]
     assert main(["export", "wildtrack", str(data), str(tmp_path / "x"), "--episode", "5"]) == 2
+    with open(ep / "people.csv", "a") as fh:     # a file changed since the manifest: refused
+        fh.write("0,9,1.0,1.0,0.25,1.8\n")
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(data), str(tmp_path / "x")]) == 2
+    assert capsys.readouterr().err.strip() == ("camtask export: error: DIR: episode_0000 differs from its manifest "
+                                               "(1 changed (people.csv)); `camtask verify` names every such file")
+    assert not (tmp_path / "x").exists()
 
 
 def _calibration(out, n):

@@ -41,6 +41,7 @@ def run(args) -> int:
         raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
     check_apart(args.out, root, episode)
     check_out(args.out, args.overwrite)
+    check_intact(episode)
     meta = json.loads((episode / "meta.json").read_text())
     with tqdm(total=len(meta["cameras"]) * int(meta["frames"]), desc="export", unit="image", file=sys.stderr,
               dynamic_ncols=True) as bar:
@@ -82,3 +83,20 @@ def check_out(out: str, overwrite: bool) -> None:
     if others and "grid.json" not in others:
         raise FileExistsError(f"--overwrite: {out} is not an export of camtask (no grid.json; it holds "
                               f"{names(others)}); empty it yourself or choose another folder")
+
+
+def check_intact(episode: Path) -> None:
+    """Refuse an episode whose files differ from its dataset's manifest (one line); warn
+    when no manifest lists it (a folder copied out of its dataset, or left by a stopped run)."""
+    from testbed.generate import episode_problems, manifest_algorithm, names, read_manifest
+
+    m = read_manifest(episode.parent)
+    entry = next((e for e in (m or {}).get("episodes", []) if e["name"] == episode.name), None)
+    if entry is None:
+        print(f"warning: DIR: no manifest lists {episode.name}; its files are exported unverified", file=sys.stderr)
+        return
+    problems = episode_problems(episode.parent, entry, manifest_algorithm(m))
+    if any(problems.values()):
+        text = "; ".join(f"{len(v)} {k} ({names(v)})" for k, v in problems.items() if v)
+        raise ValueError(f"DIR: {episode.name} differs from its manifest ({text}); `camtask verify` names every "
+                         "such file")
