@@ -149,6 +149,11 @@ def episode_problems(out: Path, entry: dict, algorithm: str = ALGORITHM) -> dict
             "extra": sorted(set(found) - set(listed))}
 
 
+def problems_text(problems: dict[str, list[str]]) -> str:
+    """:func:`episode_problems` in one line: ``1 missing (a.png); 2 changed (b, c)``."""
+    return "; ".join(f"{len(v)} {k} ({names(v)})" for k, v in problems.items() if v)
+
+
 def verify_episode(out: Path, entry: dict, algorithm: str = ALGORITHM) -> bool:
     """True when ``out/entry['name']`` holds exactly the files listed, with their checksums."""
     return not any(episode_problems(out, entry, algorithm).values())
@@ -487,7 +492,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
 
             def submit(i: int):
                 fut = client.submit(_remote_episode, config, i, str(out.absolute()), pure=False,
-                                    key=f"episode-{i}-{os.getpid()}-{time.time_ns()}")
+                                    key=episode_key(i))
                 fut.add_done_callback(lambda _: ready.set())
                 return fut
 
@@ -564,6 +569,20 @@ def frames_in_progress(out: Path, config: EpisodeConfig) -> dict[int, int]:
         except (ValueError, IndexError, OSError):
             continue
     return counts
+
+
+def episode_key(index: int) -> str:
+    """The Dask key of episode ``index`` in this run: unique per process and call."""
+    return f"episode-{index}-{os.getpid()}-{time.time_ns()}"
+
+
+def episode_of_key(key) -> int:
+    """The episode index of an :func:`episode_key`.
+
+    >>> episode_of_key(episode_key(12))
+    12
+    """
+    return int(str(key).split("-")[1])
 
 
 def _remote_episode(config: EpisodeConfig, index: int, out: str) -> tuple[dict, str, dict]:

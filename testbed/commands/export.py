@@ -88,7 +88,7 @@ def check_out(out: str, overwrite: bool) -> None:
 def check_intact(episode: Path) -> None:
     """Refuse an episode whose files differ from its dataset's manifest (one line); warn
     when no manifest lists it (a folder copied out of its dataset, or left by a stopped run)."""
-    from testbed.generate import episode_problems, manifest_algorithm, names, read_manifest
+    from testbed.generate import episode_problems, manifest_algorithm, problems_text, read_manifest
 
     m = read_manifest(episode.parent)
     entry = next((e for e in (m or {}).get("episodes", []) if e["name"] == episode.name), None)
@@ -97,6 +97,5 @@ def check_intact(episode: Path) -> None:
         return
     problems = episode_problems(episode.parent, entry, manifest_algorithm(m))
     if any(problems.values()):
-        text = "; ".join(f"{len(v)} {k} ({names(v)})" for k, v in problems.items() if v)
-        raise ValueError(f"DIR: {episode.name} differs from its manifest ({text}); `camtask verify` names every "
-                         "such file")
+        raise ValueError(f"DIR: {episode.name} differs from its manifest ({problems_text(problems)}); "
+                         "`camtask verify` names every such file")

@@ -61,7 +61,7 @@ def check_positive(name: str, value: int) -> int:
 
 
 def build_config(args: argparse.Namespace):
-    """Validate the arguments (no rendering) and return the :class:`EpisodeConfig`."""
+    """Validate the arguments (no rendering); return the :class:`EpisodeConfig` and its scene."""
     from pipeline.params import load_params
     from render.renderer import check_camera_numbers
     from testbed.cli import check_seed
@@ -85,17 +85,15 @@ def build_config(args: argparse.Namespace):
         raise ValueError(f"scene: {scene.name!r} has floor-plane cameras only; rendering needs calibrated cameras")
     check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])
     silhouette_dtype(scene.people.count)
-    return config
+    return config, scene
 
 
 def run(args: argparse.Namespace) -> int:
-    from testbed.episodes import load_episode_scene
     from testbed.generate import check_out, check_space, estimate_bytes, exclusive
     from testbed.parallel import default_workers
 
-    config = build_config(args)
+    config, scene = build_config(args)
     out = Path(args.out)
-    scene = load_episode_scene(config)
     if not (args.overwrite or args.resume):          # those free or keep episodes: checked below
         check_space(out, estimate_bytes(config, scene, 1), "one episode")
     check_out(out, args.resume, args.overwrite)       # refuse before starting a cluster
@@ -166,10 +164,11 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
                 started = True
                 done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
     except Exception as exc:                          # a full disk, a lost mount, a worker that kept dying
-        if not started or not stopped_by_machine(exc):
+        text = machine_error(exc) if started else None
+        if text is None:
             raise
         finished = len((read_manifest(out) or {}).get("episodes", []))
-        raise RunError(f"{machine_error_text(exc)}; stopped with {finished} of {args.episodes} episodes finished, "
+        raise RunError(f"{text}; stopped with {finished} of {args.episodes} episodes finished, "
                        f"listed in {out / MANIFEST} (--resume finishes the run)") from None
     finally:
         if started and args.scheduler is None and workers:
@@ -184,22 +183,19 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     return 0
 
 
-def machine_error_text(exc: BaseException) -> str:
-    """One line for :func:`stopped_by_machine` errors (Dask's KilledWorker text is a paragraph)."""
+def machine_error(exc: BaseException) -> str | None:
+    """One line for an error of the machine rather than a bug: an OSError, or a Dask episode
+    whose workers kept dying (``KilledWorker``, whose own text is a paragraph); else None."""
     if isinstance(exc, OSError):
         return str(exc)
-    index = int(str(exc.task).split("-")[1])      # keys are episode-<index>-<pid>-<ns>
-    deaths = exc.allowed_failures + 1
-    return (f"episode {index}: {deaths} worker process{'es' * (deaths > 1)} died running it (the last at "
-            f"{exc.last_worker.address}; out of memory?)")
-
-
-def stopped_by_machine(exc: BaseException) -> bool:
-    """An OSError, or a Dask episode whose workers kept dying (``KilledWorker``): not a bug."""
-    if isinstance(exc, OSError):
-        return True
     if "distributed" not in sys.modules:          # no cluster was used
-        return False
+        return None
     from distributed import KilledWorker
 
-    return isinstance(exc, KilledWorker)
+    from testbed.generate import episode_of_key
+
+    if not isinstance(exc, KilledWorker):
+        return None
+    deaths = exc.allowed_failures + 1
+    return (f"episode {episode_of_key(exc.task)}: {deaths} worker process{'es' * (deaths > 1)} died running it "
+            f"(the last at {exc.last_worker.address}; out of memory?)")

@@ -32,6 +32,7 @@ def run(args) -> int:
         episode_problems,
         manifest_algorithm,
         names,
+        problems_text,
         read_manifest,
         unlisted,
     )
@@ -49,8 +50,7 @@ def run(args) -> int:
             problems = episode_problems(root, entry, algorithm)
             if any(problems.values()):
                 bad.append(entry["name"])
-                text = "; ".join(f"{len(v)} {k} ({names(v)})" for k, v in problems.items() if v)
-                tqdm.write(f"{entry['name']}: {text}", file=sys.stdout)
+                tqdm.write(f"{entry['name']}: {problems_text(problems)}", file=sys.stdout)
             bar.update(len(entry["files"]))
     left = [p.name for p in unlisted(root, entries)]
     if left:
