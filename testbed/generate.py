@@ -179,11 +179,16 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
     if others and not (resume or overwrite):
         raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "
                               "or --overwrite to replace it")
-    if others and MANIFEST not in others:
-        flag = "--resume" if resume else "--overwrite"
-        raise FileExistsError(f"{flag}: {out} is not a camtask render dataset (no {MANIFEST}; it holds "
-                              f"{names(others)}); empty it yourself or choose another folder")
+    refuse_foreign(out, others, MANIFEST, "a camtask render dataset", "--resume" if resume else "--overwrite")
     return out
+
+
+def refuse_foreign(folder: Path | str, others: list[str], marker: str, what: str, flag: str) -> None:
+    """Refuse ``flag`` (which empties or adds to ``folder``) when ``folder`` holds ``others``
+    but not ``marker``: it is not ``what``, so its files are none of ours to delete."""
+    if others and marker not in others:
+        raise FileExistsError(f"{flag}: {folder} is not {what} (no {marker}; it holds {names(others)}); "
+                              "empty it yourself or choose another folder")
 
 
 def names(paths: list[str], most: int = 3) -> str:

@@ -70,7 +70,11 @@ def test_export_wildtrack(tmp_path, capsys):
     assert {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "notes.txt").write_text("x")
+    capsys.readouterr()
     assert main(["export", "wildtrack", str(data), str(tmp_path / "mine"), "--overwrite"]) == 2  # not an export
+    assert capsys.readouterr().err.strip() == (
+        f"camtask export: error: --overwrite: {tmp_path / 'mine'} is not an export of camtask (no grid.json; "
+        "it holds notes.txt); empty it yourself or choose another folder")
     assert [p.name for p in (tmp_path / "mine").iterdir()] == ["notes.txt"]
     assert main(["export", "wildtrack", str(data), str(tmp_path / "x"), "--episode", "5"]) == 2
     with open(ep / "people.csv", "a") as fh:     # a file changed since the manifest: refused

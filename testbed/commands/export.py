@@ -40,7 +40,7 @@ def run(args) -> int:
     if not (episode / "meta.json").is_file():
         raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
     check_apart(args.out, root, episode)
-    check_out(args.out, args.overwrite)
+    check_export_out(args.out, args.overwrite)
     check_intact(episode)
     meta = json.loads((episode / "meta.json").read_text())
     with tqdm(total=len(meta["cameras"]) * int(meta["frames"]), desc="export", unit="image", file=sys.stderr,
@@ -68,10 +68,10 @@ def check_apart(out: str, *sources: Path) -> None:
             raise ValueError(f"OUT: {out} holds DIR {src}; choose a folder outside the dataset")
 
 
-def check_out(out: str, overwrite: bool) -> None:
+def check_export_out(out: str, overwrite: bool) -> None:
     """Refuse an OUT that is a file, or a non-empty folder unless ``overwrite`` and it is an
     earlier export (it holds grid.json): anything else in it is none of ours to delete."""
-    from testbed.generate import names
+    from testbed.generate import refuse_foreign
 
     o = Path(out)
     if o.exists() and not o.is_dir():
@@ -80,9 +80,7 @@ def check_out(out: str, overwrite: bool) -> None:
     if others and not overwrite:
         raise FileExistsError(f"OUT: {out} exists and is not empty; choose another directory "
                               "or pass --overwrite to replace an earlier export")
-    if others and "grid.json" not in others:
-        raise FileExistsError(f"--overwrite: {out} is not an export of camtask (no grid.json; it holds "
-                              f"{names(others)}); empty it yourself or choose another folder")
+    refuse_foreign(out, others, "grid.json", "an export of camtask", "--overwrite")
 
 
 def check_intact(episode: Path) -> None:
