@@ -106,7 +106,6 @@ class Rectifier:
     rectifier serves every stacking (every opening kernel).
 
     K_virtual : (n_cams, 3, 3) float; bearings : (n_cams, width) float, radians, world frame
-    maps_x, maps_y : (n_cams, out_height, width) float32 per-camera maps (for references)
     fixed_map : (n_cams, out_height, width, 2) int16, source (column, row) of every output
         pixel in its camera's raw image, (-1, -1) where it falls outside (:func:`nearest_map`)
     height : raw image rows per camera
@@ -119,8 +118,6 @@ class Rectifier:
     out_height: int
     K_virtual: np.ndarray
     bearings: np.ndarray
-    maps_x: np.ndarray
-    maps_y: np.ndarray
     fixed_map: np.ndarray
     height: int
     column_x: np.ndarray
@@ -137,17 +134,24 @@ class Rectifier:
         width = w if width is None else int(width)
         Ks, heights = zip(*(virtual_camera_matrix(c, width) for c in cameras))
         out_h = max(heights)
-        mx, my, fixed = [], [], []
-        for cam, K in zip(cameras, Ks):
-            x, y = rectify_maps(cam, K, (width, out_h))
-            mx.append(x); my.append(y)
-            fixed.append(nearest_map(x, y, (w, h)))
-        fixed = np.stack(fixed)
+        fixed = np.stack([nearest_map(*rectify_maps(cam, K, (width, out_h)), (w, h))   # float maps dropped
+                          for cam, K in zip(cameras, Ks)])
         column_x, row_y = _envelopes(fixed)
         bearings = np.stack([column_bearings(c, K, width) for c, K in zip(cameras, Ks)])
         ro = lambda a: (a.setflags(write=False), a)[1]
-        return cls(width, out_h, ro(np.stack(Ks)), ro(bearings), ro(np.stack(mx)),
-                   ro(np.stack(my)), ro(fixed), h, ro(column_x), ro(row_y))
+        return cls(width, out_h, ro(np.stack(Ks)), ro(bearings), ro(fixed), h, ro(column_x), ro(row_y))
+
+    def float_maps(self, cameras) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The float maps (x, y), each (out_height, width) float32, that :attr:`fixed_map` rounds,
+        one pair per camera of ``cameras`` (the rig this rectifier was built for).
+
+        For references (``cv2.remap`` with float maps); made on demand, not kept (2 x 1.4 MB
+        per lab camera, which production never reads).
+        """
+        cameras = tuple(cameras)
+        if len(cameras) != self.n_cams:
+            raise ValueError(f"cameras: expected the {self.n_cams} cameras of this rectifier, got {len(cameras)}")
+        return [rectify_maps(c, K, (self.width, self.out_height)) for c, K in zip(cameras, self.K_virtual)]
 
     def remap_stacked(self, stacked: np.ndarray) -> np.ndarray:
         """Remap masks (n_cams, rows, W) or (n_cams * rows, W) uint8 -> (n_cams, out_height, width) uint8.

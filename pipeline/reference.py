@@ -23,6 +23,7 @@ class ReferencePipeline:
         self.params = params
         self.background = np.asarray(background, np.float64)    # (n_cams, H, W, 3)
         self.rectifier = Rectifier.build(self.cameras)
+        self.maps = self.rectifier.float_maps(self.cameras)     # per camera (x, y) float32
         self.state = None
 
     def foreground(self, frame: np.ndarray, i: int) -> np.ndarray:
@@ -47,8 +48,8 @@ class ReferencePipeline:
             fg = self.foreground(frames[i], i)
             if p.opening_kernel > 1:
                 fg = ndimage.binary_opening(fg, np.ones((p.opening_kernel,) * 2, bool), border_value=0)
-            rect = cv2.remap(fg.astype(np.uint8), self.rectifier.maps_x[i], self.rectifier.maps_y[i],
-                             cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+            rect = cv2.remap(fg.astype(np.uint8), *self.maps[i], cv2.INTER_NEAREST,
+                             borderMode=cv2.BORDER_CONSTANT, borderValue=0)
             sums = rect.sum(axis=0).astype(np.float64)
             padded = np.pad(sums, p.spatial_kernel // 2, mode="edge")
             rows.append(np.convolve(padded, np.ones(p.spatial_kernel), mode="valid") / p.spatial_kernel)

@@ -158,10 +158,17 @@ def lab_rectifier():
     return Rectifier.build(LAB[:4])
 
 
-def float_map_remap(rect, stacked):
-    """Each camera's own rows remapped with its float maps, as the reference pipeline does."""
+@functools.cache
+def lab_float_maps():
+    return lab_rectifier().float_maps(LAB[:4])
+
+
+def float_map_remap(stacked):
+    """Each camera's own rows remapped with its float maps (of :func:`lab_rectifier`), as the
+    reference pipeline does."""
+    rect = lab_rectifier()
     src = stacked.reshape(rect.n_cams, -1, stacked.shape[-1])[:, :rect.height]
-    return np.stack([cv2.remap(src[i], rect.maps_x[i], rect.maps_y[i], cv2.INTER_NEAREST,
+    return np.stack([cv2.remap(src[i], *lab_float_maps()[i], cv2.INTER_NEAREST,
                                borderMode=cv2.BORDER_CONSTANT, borderValue=0) for i in range(rect.n_cams)])
 
 
@@ -180,7 +187,7 @@ def test_remap_of_the_non_zero_box_is_each_cameras_own_remap(rows, blobs, junk_b
     if junk_between:
         stacked[:, 480:] = 7
     flat = stacked.reshape(-1, 640)
-    np.testing.assert_array_equal(rect.remap_stacked(flat), float_map_remap(rect, flat))
+    np.testing.assert_array_equal(rect.remap_stacked(flat), float_map_remap(flat))
 
 
 def test_remap_of_empty_full_and_noise_masks():
@@ -188,13 +195,15 @@ def test_remap_of_empty_full_and_noise_masks():
     empty = np.zeros((4 * 480, 640), np.uint8)
     assert not rect.remap_stacked(empty).any()
     full = np.full_like(empty, 255)
-    np.testing.assert_array_equal(rect.remap_stacked(full), float_map_remap(rect, full))
+    np.testing.assert_array_equal(rect.remap_stacked(full), float_map_remap(full))
     assert 0.9 < rect.remap_stacked(full).mean() / 255 < 1.0     # a few output pixels fall outside the image
     noise = np.random.default_rng(3).integers(0, 256, empty.shape, dtype=np.uint8)
-    np.testing.assert_array_equal(rect.remap_stacked(noise), float_map_remap(rect, noise))
-    np.testing.assert_array_equal(rect.remap_stacked(noise.reshape(4, 480, 640)), float_map_remap(rect, noise))
+    np.testing.assert_array_equal(rect.remap_stacked(noise), float_map_remap(noise))
+    np.testing.assert_array_equal(rect.remap_stacked(noise.reshape(4, 480, 640)), float_map_remap(noise))
     with pytest.raises(ValueError, match="at least 480 rows"):
         rect.remap_stacked(noise.reshape(4, 480, 640)[:, :479])
+    with pytest.raises(ValueError, match="expected the 4 cameras of this rectifier, got 3"):
+        rect.float_maps(LAB[:3])
 
 
 @pytest.mark.parametrize("index", [0, 4, 9, 15])
