@@ -190,6 +190,26 @@ def test_remap_of_the_non_zero_box_is_each_cameras_own_remap(rows, blobs, junk_b
     np.testing.assert_array_equal(rect.remap_stacked(flat), float_map_remap(flat))
 
 
+@settings(max_examples=80, deadline=None)
+@given(hnp.arrays(np.uint8, st.tuples(st.integers(1, 40), st.integers(1, 120)),
+                  elements=st.sampled_from([0, 0, 0, 0, 1, 255])),
+       st.integers(1, 20))
+def test_nonzero_boxes_hold_every_non_zero_pixel_in_runs_of_columns(image, gap):
+    from pipeline.rectify import nonzero_boxes
+
+    boxes = nonzero_boxes(image, gap)
+    covered = np.zeros(image.shape, bool)
+    for x, y, w, h in boxes:
+        covered[y:y + h, x:x + w] = True
+        part = image[y:y + h, x:x + w]
+        assert part[:, 0].any() and part[:, -1].any() and part[0].any() and part[-1].any()  # tight
+    assert not (image.astype(bool) & ~covered).any()
+    starts, ends = [x for x, _, _, _ in boxes], [x + w for x, _, w, _ in boxes]
+    assert starts == sorted(starts)
+    assert all(s - e >= gap for e, s in zip(ends, starts[1:]))     # at least gap zero columns between
+    assert all(not image[:, e:s].any() for e, s in zip(ends, starts[1:]))
+
+
 def test_remap_of_empty_full_and_noise_masks():
     rect = lab_rectifier()
     empty = np.zeros((4 * 480, 640), np.uint8)
