@@ -211,10 +211,12 @@ def nonzero_boxes(image: np.ndarray, gap: int = GAP) -> list[tuple[int, int, int
     if not occupied.size:
         return []
     cuts = np.flatnonzero(np.diff(occupied) > gap)
+    starts = [int(occupied[0])] + occupied[cuts + 1].tolist()
+    ends = occupied[cuts].tolist() + [int(occupied[-1])]               # inclusive
     boxes = []
-    for c0, c1 in zip(occupied[np.r_[0, cuts + 1]], occupied[np.r_[cuts, -1]] + 1):
-        _, y, _, h = cv2.boundingRect(image[:, c0:c1])
-        boxes.append((int(c0), y, int(c1 - c0), h))
+    for c0, c1 in zip(starts, ends):
+        _, y, _, h = cv2.boundingRect(image[:, c0:c1 + 1])
+        boxes.append((c0, y, c1 + 1 - c0, h))
     return boxes
 
 

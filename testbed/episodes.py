@@ -35,6 +35,7 @@ import cv2
 import numpy as np
 
 from pipeline.files import temp_folder
+from pipeline.rectify import nonzero_boxes
 from testbed.checksum import ALGORITHM, file_digest
 from testbed.dataset import frame_name, write_calibration
 from testbed.png import write_png
@@ -243,7 +244,8 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
     lut = np.zeros((n, 256), dtype)                                     # label -> bit, direct people only
     lut[:, 1:P + 1] = np.where(overlap, 0, bits)
     for c in np.flatnonzero(lut.any(axis=1)):
-        cv2.LUT(labels[c], lut[c], dst=out[c])
+        for x, y, w, h in nonzero_boxes(labels[c]):                     # label 0 stays 0
+            cv2.LUT(labels[c, y:y + h, x:x + w], lut[c], dst=out[c, y:y + h, x:x + w])
     for i in range(P):
         cams = np.flatnonzero(overlap[:, i])
         if cams.size:
