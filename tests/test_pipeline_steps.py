@@ -177,7 +177,7 @@ def float_map_remap(stacked):
        st.lists(st.tuples(st.integers(0, 3), st.integers(0, 479), st.integers(0, 639), st.integers(1, 200),
                           st.integers(1, 300), st.sampled_from([1, 128, 255])), max_size=6),
        st.booleans())
-def test_remap_of_the_non_zero_box_is_each_cameras_own_remap(rows, blobs, junk_between):
+def test_remap_of_the_non_zero_boxes_is_each_cameras_own_remap(rows, blobs, junk_between):
     """Remapping only what a camera's non-zero pixels can reach gives its whole-image remap with
     its float maps; the rows between cameras (and the other cameras) are never read."""
     rect = lab_rectifier()
