@@ -96,6 +96,33 @@ def rectify_maps(camera: Camera, K_virtual: np.ndarray, size: tuple[int, int]) -
                                        size, cv2.CV_32FC1)
 
 
+def level_cameras(cameras, width: int | None = None) -> tuple[np.ndarray, int, int]:
+    """The level virtual cameras of a rig: (K_virtual (n_cams, 3, 3), out_height, width).
+
+    width : output width, pixels (default the cameras'); out_height covers every camera's
+    raw image (:func:`virtual_camera_matrix`). The cameras must share one resolution.
+    """
+    cameras = tuple(cameras)
+    if not cameras:
+        raise ValueError("cameras: expected at least one calibrated camera")
+    h, w = cameras[0].height, cameras[0].width
+    if any((c.height, c.width) != (h, w) for c in cameras):
+        raise ValueError("cameras: expected every camera to have the same resolution")
+    width = w if width is None else int(width)
+    Ks, heights = zip(*(virtual_camera_matrix(c, width) for c in cameras))
+    return np.stack(Ks), max(heights), width
+
+
+def float_maps(cameras, width: int | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per camera the float maps (x, y), each (out_height, width) float32, of its remap to
+    the level virtual camera: what :attr:`Rectifier.fixed_map` rounds, for references
+    (``cv2.remap`` with float maps). 2 x 1.4 MB per lab camera, which production never keeps.
+    """
+    cameras = tuple(cameras)
+    Ks, out_h, width = level_cameras(cameras, width)
+    return [rectify_maps(c, K, (width, out_h)) for c, K in zip(cameras, Ks)]
+
+
 @dataclass(frozen=True, eq=False)
 class Rectifier:
     """Precomputed rectification of a rig: nearest-neighbour remaps with integer maps.
@@ -126,32 +153,14 @@ class Rectifier:
     @classmethod
     def build(cls, cameras, width: int | None = None) -> Rectifier:
         cameras = tuple(cameras)
-        if not cameras:
-            raise ValueError("cameras: expected at least one calibrated camera")
+        Ks, out_h, width = level_cameras(cameras, width)
         h, w = cameras[0].height, cameras[0].width
-        if any((c.height, c.width) != (h, w) for c in cameras):
-            raise ValueError("cameras: expected every camera to have the same resolution")
-        width = w if width is None else int(width)
-        Ks, heights = zip(*(virtual_camera_matrix(c, width) for c in cameras))
-        out_h = max(heights)
         fixed = np.stack([nearest_map(*rectify_maps(cam, K, (width, out_h)), (w, h))   # float maps dropped
                           for cam, K in zip(cameras, Ks)])
         column_x, row_y = _envelopes(fixed)
         bearings = np.stack([column_bearings(c, K, width) for c, K in zip(cameras, Ks)])
         ro = lambda a: (a.setflags(write=False), a)[1]
-        return cls(width, out_h, ro(np.stack(Ks)), ro(bearings), ro(fixed), h, ro(column_x), ro(row_y))
-
-    def float_maps(self, cameras) -> list[tuple[np.ndarray, np.ndarray]]:
-        """The float maps (x, y), each (out_height, width) float32, that :attr:`fixed_map` rounds,
-        one pair per camera of ``cameras`` (the rig this rectifier was built for).
-
-        For references (``cv2.remap`` with float maps); made on demand, not kept (2 x 1.4 MB
-        per lab camera, which production never reads).
-        """
-        cameras = tuple(cameras)
-        if len(cameras) != self.n_cams:
-            raise ValueError(f"cameras: expected the {self.n_cams} cameras of this rectifier, got {len(cameras)}")
-        return [rectify_maps(c, K, (self.width, self.out_height)) for c, K in zip(cameras, self.K_virtual)]
+        return cls(width, out_h, ro(Ks), ro(bearings), ro(fixed), h, ro(column_x), ro(row_y))
 
     def remap_stacked(self, stacked: np.ndarray) -> np.ndarray:
         """Remap masks (n_cams, rows, W) or (n_cams * rows, W) uint8 -> (n_cams, out_height, width) uint8.

@@ -12,7 +12,7 @@ import numpy as np
 from scipy import ndimage
 
 from .params import PipelineParams
-from .rectify import Rectifier
+from .rectify import float_maps
 
 
 class ReferencePipeline:
@@ -22,8 +22,7 @@ class ReferencePipeline:
         self.cameras = tuple(cameras)
         self.params = params
         self.background = np.asarray(background, np.float64)    # (n_cams, H, W, 3)
-        self.rectifier = Rectifier.build(self.cameras)
-        self.maps = self.rectifier.float_maps(self.cameras)     # per camera (x, y) float32
+        self.maps = float_maps(self.cameras)                    # per camera (x, y) float32
         self.state = None
 
     def foreground(self, frame: np.ndarray, i: int) -> np.ndarray:
