@@ -11,9 +11,9 @@ not depend on which worker renders the episode or how many there are.
 Each process keeps its last :data:`KEEP` :class:`render.Renderer` s, one per (scene text,
 people, cameras), in a module cache (one GL context per process; renderers are not
 created and destroyed per episode), and closes older ones: a worker of a long-lived
-cluster renders run after run. The caches are keyed by the scene file's text, not its
-path, so a file edited between two runs is rendered as it is now. The layout is in
-docs/dataset.md.
+cluster renders run after run. The caches are keyed by the scene file's text, so a file
+edited between two runs is rendered as it is now; the parsed scenes by its path as well,
+since a scene without a ``name`` is named after its file. The layout is in docs/dataset.md.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ FORMATS = ("png", "video")
 #: as many rigs' rectification maps, and twice as many pipelines (one per parameter set).
 KEEP = 2
 
-_SCENES: OrderedDict = OrderedDict()      # scene text -> Scene, parsed once
+_SCENES: OrderedDict = OrderedDict()      # (scene text, file) -> Scene, parsed once
 _RENDERERS: OrderedDict = OrderedDict()   # (scene text, people, cameras) -> Renderer
 _RECTIFIERS: OrderedDict = OrderedDict()  # (scene text, cameras) -> Rectifier, shared by that rig's pipelines
 _PIPELINES: OrderedDict = OrderedDict()   # (renderer key, parameters) -> Pipeline on its background, reset per episode
@@ -136,8 +136,9 @@ def load_episode_scene(config: EpisodeConfig):
     from scene.config import scene_file
     from testbed.episode import with_people
 
-    text = scene_text(config)
-    scene = _cached(_SCENES, text, lambda: Scene.from_text(text, str(scene_file(config.scene))), 2 * KEEP)
+    text, source = scene_text(config), str(scene_file(config.scene))
+    # keyed by the file too: a scene without ``name`` is named after its file (meta.json's "scene")
+    scene = _cached(_SCENES, (text, source), lambda: Scene.from_text(text, source), 2 * KEEP)
     return with_people(scene, config.people)
 
 

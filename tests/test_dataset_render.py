@@ -405,6 +405,20 @@ def test_resuming_a_finished_run_needs_no_disk_space(dataset, tmp_path, capsys, 
     assert "--out: 0 MB free on" in capsys.readouterr().err
 
 
+def test_two_scene_files_of_one_text_keep_their_own_names(tmp_path):
+    """A scene without ``name`` is named after its file (meta.json's "scene"): a process that
+    parsed one copy first still names the other after its own file, as a fresh process would."""
+    from scene.config import scene_path
+    from testbed.episodes import EpisodeConfig, load_episode_scene
+
+    text = "\n".join(line for line in scene_path("lab").read_text().splitlines() if not line.startswith("name:"))
+    for name in ("room_a", "room_b"):
+        (tmp_path / f"{name}.yaml").write_text(text)
+    names = [load_episode_scene(EpisodeConfig(str(tmp_path / f"{n}.yaml"), 1, (2,), 1, 5)).name
+             for n in ("room_a", "room_b", "room_a")]
+    assert names == ["room_a", "room_b", "room_a"]
+
+
 def test_a_scene_file_edited_between_runs_is_rendered_as_edited(tmp_path, monkeypatch):
     """A process keeps its renderers from run to run (the workers of a long-lived cluster):
     they are keyed by the scene file's text, not its path. A run reads the text once."""
