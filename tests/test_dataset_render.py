@@ -388,6 +388,27 @@ def test_saved_scanlines_come_from_the_saved_frames_and_masks(dataset):
     assert saved_gt.any()
 
 
+def test_scanlines_and_tune_leave_an_episode_as_its_manifest_says(dataset, tmp_path, capsys):
+    """On an episode of a dataset, `camtask scanlines` and `camtask tune` need --out (a
+    replaced scanlines.npz failed `camtask verify`); with it, the episode stays intact."""
+    ep = dataset / "episode_0000"
+    before = files_of(dataset)
+    capsys.readouterr()
+    assert main(["scanlines", str(ep)]) == 2
+    assert main(["tune", str(ep), "--trials", "1"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert [line.count(f"{ep} is an episode of the dataset {dataset}") for line in err] == [1, 1]
+    assert "give --out FILE to write scanlines.npz elsewhere" in err[0]
+    assert "give --out FILE to write tuned_params.yaml elsewhere" in err[1]
+    assert main(["tune", str(dataset), "--trials", "1"]) == 2               # two episodes: which one?
+    assert f"{dataset} is a dataset of 2 episodes" in capsys.readouterr().err
+    assert main(["scanlines", str(ep), "--out", str(tmp_path / "s.npz"), "--json"]) == 0
+    assert files_of(dataset) == before
+    assert main(["verify", str(dataset)]) == 0
+    with np.load(tmp_path / "s.npz") as new, np.load(ep / "scanlines.npz") as saved:
+        np.testing.assert_array_equal(new["scanlines"], saved["scanlines"])   # same frames, same parameters
+
+
 def test_resuming_a_finished_run_needs_no_disk_space(dataset, tmp_path, capsys, monkeypatch):
     import collections
 

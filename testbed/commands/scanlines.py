@@ -5,9 +5,11 @@
 
 A render directory gives ``DIR/scanlines.npz`` (``scanlines``, ``gt_scanlines``
 (n_frames, n_cams, W) bool, ``bearings`` (n_cams, W) float radians) and the CDnet metrics
-of the scanline columns and of the foreground pixels. A video (or a folder of images,
-sorted) gives ``scanlines`` (n_frames, 1, W) and ``bearings`` (1, W); its first N frames
-are the background. Files are written atomically, only when the run completes.
+of the scanline columns and of the foreground pixels. An episode of a dataset written by
+``camtask render`` needs ``--out``: the dataset's manifest checksums its files. A video
+(or a folder of images, sorted) gives ``scanlines`` (n_frames, 1, W) and ``bearings``
+(1, W); its first N frames are the background. Files are written atomically, only when
+the run completes.
 """
 
 from __future__ import annotations
@@ -25,10 +27,11 @@ from tqdm import tqdm
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("scanlines", help="frames to 640-bit scanlines, with metrics",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("dir", nargs="?", help="render directory (from `camtask render`)")
+    p.add_argument("dir", nargs="?", help="render directory (from `camtask render`), or a dataset of one episode")
     p.add_argument("--params", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     p.add_argument("--frames", type=int, help="process at most this many frames")
-    p.add_argument("--out", help="output .npz (default DIR/scanlines.npz, or VIDEO_scanlines.npz)")
+    p.add_argument("--out", help="output .npz (default DIR/scanlines.npz, or VIDEO_scanlines.npz; "
+                                 "required for an episode of a dataset)")
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON document")
     p.add_argument("--video", help="video file or folder of images instead of a render directory")
     p.add_argument("--calibration", help="camera calibration (OpenCV YAML) for --video")
@@ -60,9 +63,9 @@ def _run_render(args, params) -> int:
     from pipeline.runs import run_sequence
 
     render = RenderDir(episode_dir(Path(args.dir)))
+    out = Path(args.out) if args.out else default_output(render.root, "scanlines.npz")
     n = len(render) if args.frames is None else min(args.frames, len(render))
     pipe = Pipeline(render.cameras, params, render.background())
-    out = Path(args.out) if args.out else render.root / "scanlines.npz"
     with tqdm(total=n, desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
         result = run_sequence(pipe, (render.frames(i) for i in range(n)),
                               (render.labels(i) for i in range(n)), progress=lambda: bar.update())
@@ -82,6 +85,20 @@ def episode_dir(root: Path) -> Path:
         raise ValueError(f"DIR: {root} is a dataset of {len(episodes)} episodes; give one episode folder, "
                          f"e.g. {root / 'episode_0000'}")
     return episodes[0]
+
+
+def default_output(root: Path, name: str) -> Path:
+    """``root / name``: where a command run on the render directory ``root`` writes by default.
+
+    Not into an episode of a dataset (a folder ``episode_*`` beside a ``manifest.json``): the
+    manifest holds the checksum of each of its files, so a file replaced or added there makes
+    ``camtask verify`` fail and ``camtask render --resume`` render the episode again. That
+    is a one-line error asking for ``--out``, raised before any work.
+    """
+    if root.name.startswith("episode_") and (root.parent / "manifest.json").is_file():
+        raise ValueError(f"--out: {root} is an episode of the dataset {root.parent}, whose manifest.json "
+                         f"checksums its files; give --out FILE to write {name} elsewhere")
+    return root / name
 
 
 def _run_video(args, params) -> int:

@@ -3,8 +3,9 @@
     camtask tune DIR --trials N [--out params.yaml] [--seed S] [--plot FILE.png] [--frames N]
 
 The first trial is the starting parameters (``--params``, default the defaults); the best
-are written as YAML (default DIR/tuned_params.yaml), atomically. Same data, same seed,
-same result.
+are written as YAML (default DIR/tuned_params.yaml; ``--out`` is required for an episode
+of a dataset written by ``camtask render``), atomically. DIR is a render directory, or a
+dataset of one episode. Same data, same seed, same result.
 """
 
 from __future__ import annotations
@@ -21,10 +22,11 @@ from tqdm import tqdm
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("tune", help="tune pipeline parameters for scanline F1 (Optuna)",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("dir", help="render directory (from `camtask render`)")
+    p.add_argument("dir", help="render directory (from `camtask render`), or a dataset of one episode")
     p.add_argument("--trials", type=int, required=True, help="number of Optuna trials")
     p.add_argument("--seed", type=int, default=0, help="sampler seed (default 0)")
-    p.add_argument("--out", help="best parameters YAML (default DIR/tuned_params.yaml)")
+    p.add_argument("--out", help="best parameters YAML (default DIR/tuned_params.yaml; "
+                                 "required for an episode of a dataset)")
     p.add_argument("--plot", help="PNG of F1 per trial and best so far")
     p.add_argument("--params", help="starting parameters YAML (default assets/pipeline/default.yaml)")
     p.add_argument("--frames", type=int, default=30, help="use at most this many frames (default 30)")
@@ -38,6 +40,7 @@ def run(args) -> int:
     from pipeline.params import load_params
     from pipeline.tuning import tune
     from testbed.cli import check_seed
+    from testbed.commands.scanlines import default_output, episode_dir
 
     if args.trials < 1:
         raise ValueError(f"--trials: expected an integer >= 1, got {args.trials}")
@@ -45,7 +48,8 @@ def run(args) -> int:
         raise ValueError(f"--frames: expected an integer >= 1, got {args.frames}")
     check_seed(args.seed)
     start = load_params(args.params)
-    render = RenderDir(args.dir)
+    render = RenderDir(episode_dir(Path(args.dir)))
+    out = Path(args.out) if args.out else default_output(render.root, "tuned_params.yaml")
     n = min(args.frames, len(render))
     background = render.background()
     frames = np.stack([render.frames(i) for i in range(n)])
@@ -60,7 +64,6 @@ def run(args) -> int:
             bar.update()
 
         result = tune(render.cameras, background, frames, gt, args.trials, args.seed, start, progress)
-    out = Path(args.out) if args.out else render.root / "tuned_params.yaml"
     result.best.to_yaml(out, comment=(
         f"Tuned by `camtask tune {args.dir} --trials {args.trials} --seed {args.seed} --frames {n}`:\n"
         f"scanline F1 {result.best_f1:.4f} (starting parameters {result.baseline_f1:.4f})"))
