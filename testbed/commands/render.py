@@ -178,7 +178,7 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
             # they leave)
             remove_unlisted(out)
     new = len(done) - len(keep)
-    print(f"wrote {new} episode{'s' * (new != 1)} x {args.frames} frames to {out} "
+    print(f"wrote {new} episode{'s' * (new != 1)} x {args.frames} frame{'s' * (args.frames != 1)} to {out} "
           f"({len(done)}/{args.episodes} finished)", file=sys.stderr)
     return 0
 
