@@ -10,7 +10,10 @@
     DIR/masks/camNN/NNNNNN.png   uint8 labels: 0 background, person id + 1 elsewhere
     DIR/background/camNN.png     the empty room, clean (no noise, no gain)
     DIR/people.csv               frame, person_id, x, y, radius, height (metres, world)
-    DIR/meta.json                seed, scene, frame count, dt, package versions
+    DIR/meta.json                seed, scene and its text, people, cameras, frames, dt
+
+and silhouettes, scanlines.npz, pipeline.yaml, gt_hull.json: every file, with units,
+is in docs/dataset.md.
 
 Camera numbers NN count from 01; frame numbers NNNNNN from 000000. Episodes are written
 by :func:`testbed.episodes.render_episode` into a temporary folder and renamed into place

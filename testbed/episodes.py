@@ -282,12 +282,17 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     """Render, process and write episode ``index`` into ``out/episode_NNNN``; return its manifest entry.
 
     progress : optional callable(frames_done_since_last_call) for in-process progress bars
-    seconds : optional dict, filled with the wall-clock seconds spent per stage (render,
-        silhouettes, write, pipeline, hull, finish) - for run_info.json, never the manifest
+    seconds : optional dict; the wall-clock seconds spent per stage (render, silhouettes,
+        write, pipeline, hull, finish) and in all (total) are added to it, so one dict can
+        sum several episodes - for run_info.json, never the manifest
     overlap : write and process frame f on a second thread while frame f + 1 renders (for a
         process that has a core to spare; the files are the same bytes either way)
     """
     seconds = {} if seconds is None else seconds
+
+    def spent(stage: str, dt: float) -> None:
+        seconds[stage] = seconds.get(stage, 0.0) + dt
+
     start = time.perf_counter()
     from pipeline import Pipeline, PipelineParams, Rectifier
     from tasking.hull import visual_hull_of_scanlines
@@ -359,7 +364,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
             for pid, (x, y) in enumerate(np.asarray(track[f], float)):
                 rows.append((f, pid, repr(float(x)), repr(float(y)), people.radius, people.height))
             for key, dt in (("write", t3 - t2), ("pipeline", t4 - t3), ("hull", time.perf_counter() - t4)):
-                seconds[key] = seconds.get(key, 0.0) + dt
+                spent(key, dt)
 
         loop_start = time.perf_counter()
         # overlap: a second thread consumes frame f while this one renders frame f + 1; one
@@ -373,7 +378,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
                 t1 = time.perf_counter()
                 sil = silhouettes(renderer, track[f], fr.labels)
                 for key, dt in (("render", t1 - t0), ("silhouettes", time.perf_counter() - t1)):
-                    seconds[key] = seconds.get(key, 0.0) + dt
+                    spent(key, dt)
                 if pool is None:
                     consume(f, fr, sil)
                 else:
@@ -414,8 +419,8 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
         (tmp / "meta.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
         files = checksums(tmp, digests)
         end = time.perf_counter()
-        seconds["total"] = end - start
-        seconds["finish"] = (loop_start - start) + (end - loop_end)   # set-up and the files after the frames
+        spent("total", end - start)
+        spent("finish", (loop_start - start) + (end - loop_end))    # set-up and the files after the frames
         final = out / name
         if final.exists():                       # a retried task whose first run got this far
             shutil.rmtree(final)

@@ -247,11 +247,10 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     episode i depends only on the seed and i, so a run can be extended) the manifest's
     episodes whose files verify are kept and everything else (unlisted or corrupt
     episode folders, temporary folders of killed runs) is removed; a kept episode
-    rendered from another scene text
-    than ``config``'s is refused (:func:`check_same_scene`). Then the manifest of the
-    kept episodes is written (none on a fresh run: a run stopped before its first
-    episode still names its arguments). Raises ValueError / FileExistsError before any
-    work.
+    rendered from another scene text than ``config``'s is refused
+    (:func:`check_same_scene`). Then the manifest of the kept episodes is written (none
+    on a fresh run: a run stopped before its first episode still names its arguments).
+    Raises ValueError / FileExistsError before any work.
 
     verified : called as ``verified(files, total)`` after each listed episode is checked
         on resume (``files`` of the ``total`` listed), for a progress bar
@@ -459,10 +458,10 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     ``distributed.KilledWorker``; an episode that raises stops the run, as in-process.
     The manifest is rewritten as episodes finish (:class:`ManifestWriter`: after each one
     while rewriting is cheap, less often as it grows) and at the end; on an error, the
-    episodes finished so far are listed and stay valid, and the error is re-raised. What the manifest
-    does not list (temporary folders of dead workers) is removed when every episode has
-    finished, or in-process; after an error on Dask, workers may still be writing: the
-    caller calls :func:`remove_unlisted` once they have stopped.
+    episodes finished so far are listed and stay valid, and the error is re-raised. What
+    the manifest does not list (temporary folders of dead workers) is removed when every
+    episode has finished, or in-process; after an error on Dask, workers may still be
+    writing: the caller calls :func:`remove_unlisted` once they have stopped.
     """
     out = Path(out)
     done = dict(keep)

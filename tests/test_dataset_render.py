@@ -183,6 +183,20 @@ def test_overlapped_writing_gives_the_same_files(tmp_path):
     assert counts[True] == counts[False] == [1, 1, 1]            # every frame counted once
 
 
+def test_stage_seconds_add_up_over_episodes(tmp_path):
+    """One ``seconds`` dict given to several episodes sums every stage, the total included."""
+    from testbed.episodes import EpisodeConfig, render_episode
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 9)
+    secs: dict = {}
+    render_episode(config, 0, str(tmp_path), seconds=secs)
+    first = dict(secs)
+    render_episode(config, 1, str(tmp_path), seconds=secs)
+    assert set(secs) == set(first) == {"render", "silhouettes", "write", "pipeline", "hull", "finish", "total"}
+    assert all(secs[k] > first[k] for k in first)
+    assert secs["total"] >= sum(v for k, v in secs.items() if k != "total")   # inline: the stages are parts of it
+
+
 @pytest.mark.parametrize("overlap", [True, False])
 def test_a_failure_mid_episode_leaves_nothing(tmp_path, monkeypatch, overlap):
     from testbed import episodes
