@@ -64,6 +64,13 @@ def virtual_extent(camera: Camera) -> tuple[float, float, float, float]:
     return float(left.max()), float(right.min()), float(y.min()), float(y.max())
 
 
+def check_rectifiable(cameras) -> None:
+    """Raise the one-line error of :func:`virtual_extent` for the first camera that cannot be
+    rectified to a level camera (before any work starts, rather than at the first frame)."""
+    for camera in cameras:
+        virtual_extent(camera)
+
+
 def virtual_camera_matrix(camera: Camera, width: int | None = None) -> tuple[np.ndarray, int]:
     """Camera matrix (3, 3) of the level virtual camera and the output height it needs.
 

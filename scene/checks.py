@@ -25,8 +25,27 @@ def check_choice(name: str, value: Any, valid: Iterable[str]) -> str:
     return value
 
 
+def check_finite(name: str, value: Any) -> float:
+    """Return ``value`` as a finite float; booleans and strings are not numbers here.
+
+    >>> check_finite("yaw_deg", -45)
+    -45.0
+    """
+    if isinstance(value, (bool, str, bytes)):
+        raise ValueError(f"{name}: expected a number, got {value!r}")
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a number, got {value!r}") from None
+    if not np.isfinite(x):
+        raise ValueError(f"{name}: expected a finite number, got {value!r}")
+    return x
+
+
 def check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
     """Return ``value`` as a finite float > 0 (or >= 0 with ``allow_zero``)."""
+    if isinstance(value, (bool, str, bytes)):
+        raise ValueError(f"{name}: expected a number, got {value!r}")
     try:
         x = float(value)
     except (TypeError, ValueError):

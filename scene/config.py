@@ -16,7 +16,15 @@ import numpy as np
 import yaml
 
 from .camera import Camera, FloorCamera
-from .checks import check_array, check_choice, check_int, check_mapping, check_positive, readonly
+from .checks import (
+    check_array,
+    check_choice,
+    check_finite,
+    check_int,
+    check_mapping,
+    check_positive,
+    readonly,
+)
 from .room import Room
 
 #: The safe loader, in C when PyYAML was built with libyaml (same documents, ~7x faster).
@@ -64,7 +72,8 @@ class RenderSettings:
 class Scene:
     """A room, its cameras, the people in it, and how it is rendered.
 
-    cameras : tuple of :class:`Camera` (calibrated, the lab) or :class:`FloorCamera` (circle)
+    cameras : tuple of :class:`Camera` (calibrated, the lab) or :class:`FloorCamera` (circle),
+        in number order whatever the file's order: ``cameras[i].number == i + 1``
     frame_rate : frames per second of the simulated network
     uniform_sets : the paper's hand-picked uniform taskings, k -> camera numbers
     """
@@ -158,8 +167,11 @@ def _parse_scene(config: Any, source: str) -> Scene:
     people = _parse_people(config["people"], room)
     render = _parse_render(config.get("render", {}) or {})
     uniform = _parse_uniform_sets(config.get("uniform_sets", {}) or {}, len(cameras))
+    name = config.get("name", Path(source).stem)
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"name: expected a non-empty string, got {name!r}")
     return Scene(
-        name=str(config.get("name", Path(source).stem)),
+        name=name,
         room=room,
         cameras=cameras,
         people=people,
@@ -182,6 +194,8 @@ def _parse_room(cfg: Any) -> Room:
 def _parse_cameras(cfg: Any, room: Room) -> tuple:
     check_mapping("cameras", cfg, ("intrinsics", "poses", "ring"))
     if "ring" in cfg:
+        if len(cfg) > 1:
+            raise ValueError("cameras: expected either ring or intrinsics and poses, not both")
         return _parse_ring(cfg["ring"], room)
     check_mapping("cameras", cfg, ("intrinsics", "poses"), ("intrinsics", "poses"))
     intr = check_mapping("cameras.intrinsics", cfg["intrinsics"],
@@ -208,12 +222,16 @@ def _parse_cameras(cfg: Any, room: Room) -> tuple:
         pos = check_array(f"{where}.position", pose["position"], (3,))
         if not room.contains_point(pos[:2]) or not 0 < pos[2] < room.height:
             raise ValueError(f"{where}.position: camera {pose['number']} at {pos.tolist()} is outside the room")
+        yaw = check_finite(f"{where}.yaw_deg", pose["yaw_deg"])
+        pitch = check_finite(f"{where}.pitch_deg", pose["pitch_deg"])
+        if not -90 < pitch < 90:
+            raise ValueError(f"{where}.pitch_deg: expected a pitch in (-90, 90) degrees (down is positive), "
+                             f"got {pose['pitch_deg']!r}")
         cameras.append(Camera.from_pose(
             check_int(f"{where}.number", pose["number"], minimum=1), pos,
-            np.radians(float(pose["yaw_deg"])), np.radians(float(pose["pitch_deg"])),
-            width, height, hfov, dist, principal))
+            np.radians(yaw), np.radians(pitch), width, height, hfov, dist, principal))
     _check_numbers(cameras)
-    return tuple(cameras)
+    return tuple(sorted(cameras, key=lambda c: c.number))     # cameras[i] is camera number i + 1
 
 
 def _parse_ring(cfg: Any, room: Room) -> tuple:
@@ -256,14 +274,30 @@ def _parse_people(cfg: Any, room: Room) -> People:
     if colours is None:
         colours = default_colours(count)
     colours = check_array("people.colours", colours, (None, 3))
-    if len(colours) < count or np.any(colours < 0) or np.any(colours > 255):
-        raise ValueError(f"people.colours: expected at least {count} RGB triples in 0..255")
+    if len(colours) < count or np.any(colours < 0) or np.any(colours > 255) or np.any(colours != np.round(colours)):
+        raise ValueError(f"people.colours: expected at least {count} RGB triples of integers in 0..255")
     positions = cfg.get("positions")
-    if positions is not None:
+    if positions is None:
+        check_people_capacity("people.count", count, radius, room)
+    else:
+        if count == 0 and isinstance(positions, list) and not positions:
+            positions = np.zeros((0, 2))
         positions = check_array("people.positions", positions, (count, 2))
         check_people_fit(positions, radius, room)
         positions = readonly(positions)
     return People(count, radius, height, speed, readonly(colours[:count].astype(np.uint8)), positions)
+
+
+def check_people_capacity(name: str, count: int, radius: float, room: Room) -> None:
+    """Raise if ``count`` people of ``radius`` metres are too many to drop at random in ``room``.
+
+    At most a quarter of the floor may be covered: random drops and walks need room
+    to move (a dense crowd is possible with given ``positions``).
+    """
+    capacity = room.area / (np.pi * radius**2) / 4
+    if count > capacity:
+        raise ValueError(f"{name}: {count} people of radius {radius:g} m do not fit in the room; "
+                         f"expected at most {int(capacity)}")
 
 
 def check_people_fit(positions: np.ndarray, radius: float, room: Room) -> None:
@@ -301,7 +335,9 @@ def _parse_uniform_sets(cfg: Any, n_cameras: int) -> dict[int, tuple[int, ...]]:
     out = {}
     for k, nums in cfg.items():
         k = check_int("uniform_sets key", k, minimum=1)
-        nums = tuple(int(n) for n in nums)
+        if not isinstance(nums, list):
+            raise ValueError(f"uniform_sets[{k}]: expected a list of {k} camera numbers, got {nums!r}")
+        nums = tuple(check_int(f"uniform_sets[{k}]", n) for n in nums)
         if len(nums) != k or len(set(nums)) != k or not all(1 <= n <= n_cameras for n in nums):
             raise ValueError(f"uniform_sets[{k}]: expected {k} distinct camera numbers in 1..{n_cameras}")
         out[k] = tuple(sorted(nums))

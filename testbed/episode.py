@@ -11,7 +11,7 @@ import dataclasses
 import numpy as np
 
 from scene import Scene
-from scene.config import default_colours
+from scene.config import check_people_capacity, default_colours
 from scene.motion import random_drop, random_waypoint
 
 
@@ -21,10 +21,7 @@ def with_people(scene: Scene, count: int | None, *, option: str = "--people") ->
         return scene
     if count < 0:
         raise ValueError(f"{option}: expected a number >= 0, got {count}")
-    capacity = scene.room.area / (np.pi * scene.people.radius**2) / 4
-    if count > capacity:
-        raise ValueError(f"{option}: {count} people of radius {scene.people.radius} m do not fit "
-                         f"in the room; expected at most {int(capacity)}")
+    check_people_capacity(option, count, scene.people.radius, scene.room)
     colours = default_colours(count).astype(np.uint8)
     colours[: min(count, scene.people.count)] = scene.people.colours[:count]
     people = dataclasses.replace(scene.people, count=count, colours=colours, positions=None)

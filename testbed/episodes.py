@@ -191,10 +191,10 @@ def save_npz_exact(path: Path, **arrays) -> None:
             zf.writestr(info, buf.getvalue())
 
 
-def silhouette_dtype(people: int):
-    """uint8 up to 8 people, uint16 up to 16 (PNG stores at most 16 bits)."""
+def silhouette_dtype(people: int, option: str = "--people"):
+    """uint8 up to 8 people, uint16 up to 16 (PNG stores at most 16 bits); ``option`` names the count in errors."""
     if people > 16:
-        raise ValueError(f"--people: silhouettes store one bit per person in a 16-bit PNG; expected at most 16, "
+        raise ValueError(f"{option}: silhouettes store one bit per person in a 16-bit PNG; expected at most 16, "
                          f"got {people}")
     return np.uint8 if people <= 8 else np.uint16
 

@@ -13,11 +13,12 @@
                                                     cv2.FileStorage sequence
     OUT/grid.json                                   the ground grid below, and view -> camera number
 
-Ground grid: origin at the world origin (the room corner), cells of ``CELL`` = 0.025 m
-(WILDTRACK's 2.5 cm), ``x_index = floor(x / CELL)`` along the 22 ft wall (0..268),
-``y_index = floor(y / CELL)`` along the 19 ft wall (0..231), ``positionID = x_index +
-grid_width * y_index`` (WILDTRACK's own convention, with its 480 replaced by our grid
-width, 269 for the lab). Boxes are inclusive pixel bounds of the person's *visible*
+Ground grid: origin at the corner ``(min x, min y)`` of the room's bounds (the world
+origin for the lab; ``origin_m`` in grid.json), cells of ``CELL`` = 0.025 m (WILDTRACK's
+2.5 cm), ``x_index = floor((x - min x) / CELL)`` (0..268 along the lab's 22 ft wall),
+``y_index = floor((y - min y) / CELL)`` (0..231 along its 19 ft wall), ``positionID =
+x_index + grid_width * y_index`` (WILDTRACK's own convention, with its 480 replaced by
+our grid width, 269 for the lab). Boxes are inclusive pixel bounds of the person's *visible*
 label mask in the image as exported, all -1 when the person is not visible in that view;
 ``viewNum`` is 0-based over the episode's cameras in number order.
 
@@ -49,19 +50,25 @@ from testbed.png import write_png
 CELL = 0.025
 
 
-def grid_shape(room_bounds) -> tuple[int, int]:
-    """(grid_width, grid_height) in cells covering ``(0, 0)..(max x, max y)`` of the room, metres."""
-    _, _, maxx, maxy = room_bounds
-    return math.ceil(maxx / CELL - 1e-9), math.ceil(maxy / CELL - 1e-9)
+def ground_grid(room_bounds) -> tuple[tuple[float, float], int, int]:
+    """The grid over the room's bounds ``(min x, min y, max x, max y)``, metres: its origin
+    ``(min x, min y)``, metres (the world origin for the lab, whose corner it is), and
+    ``(grid_width, grid_height)`` in cells.
+
+    >>> ground_grid((-1.0, -1.0, 1.0, 1.0))
+    ((-1.0, -1.0), 80, 80)
+    """
+    minx, miny, maxx, maxy = map(float, room_bounds)
+    return (minx, miny), math.ceil((maxx - minx) / CELL - 1e-9), math.ceil((maxy - miny) / CELL - 1e-9)
 
 
-def position_id(xy, grid_width: int) -> np.ndarray:
-    """positionID of floor points ``xy`` (n, 2) metres, world frame.
+def position_id(xy, grid_width: int, origin=(0.0, 0.0)) -> np.ndarray:
+    """positionID of floor points ``xy`` (n, 2) metres, world frame, on the grid of ``origin`` (2,) metres.
 
     >>> position_id([[0.01, 0.0], [0.03, 0.06]], 269).tolist()
     [0, 539]
     """
-    idx = np.floor(np.asarray(xy, float) / CELL).astype(int)
+    idx = np.floor((np.asarray(xy, float) - np.asarray(origin, float)) / CELL).astype(int)
     return idx[:, 0] + grid_width * idx[:, 1]
 
 
@@ -125,7 +132,7 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undisto
     numbers = list(meta["cameras"])
     frames = int(meta["frames"])
     room = Scene.from_text(meta["scene_yaml"], source=str(episode / "meta.json")).room
-    gw, gh = grid_shape(room.polygon.bounds)
+    origin, gw, gh = ground_grid(room.polygon.bounds)
     table = read_people(episode / "people.csv")
     P = int(meta["people"])
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -151,15 +158,16 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undisto
         for f in range(frames):
             rows = table[table["frame"] == f]
             xy = np.column_stack([rows["x"], rows["y"]]).astype(float)
-            pids = position_id(xy, gw)
+            pids = position_id(xy, gw, origin)
             ann = [{"personID": int(rows["person_id"][k]), "positionID": int(pids[k]),
                     "views": [{"viewNum": v, "xmin": int(b[f, v, k, 0]), "ymin": int(b[f, v, k, 1]),
                                "xmax": int(b[f, v, k, 2]), "ymax": int(b[f, v, k, 3])} for v in range(len(numbers))]}
                    for k in range(len(rows))]
             (tmp / "annotations_positions" / f"{f:08d}.json").write_text(json.dumps(ann))
         (tmp / "grid.json").write_text(json.dumps({
-            "cell_m": CELL, "origin_m": [0.0, 0.0], "grid_width": gw, "grid_height": gh,
-            "position_id": "x_index + grid_width * y_index, x_index = floor(x / cell_m)",
+            "cell_m": CELL, "origin_m": list(origin), "grid_width": gw, "grid_height": gh,
+            "position_id": "x_index + grid_width * y_index, x_index = floor((x - origin_m[0]) / cell_m), "
+                           "y_index = floor((y - origin_m[1]) / cell_m)",
             "views": {str(v): n for v, n in enumerate(numbers)}, "units": "metres, world frame",
             "undistorted": bool(undistort), "source": str(episode)}, indent=1) + "\n")
         if out.exists():

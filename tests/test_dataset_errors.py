@@ -35,6 +35,28 @@ def test_bad_scene_file(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize(("edit", "message"), [
+    # passes the scene's own checks, but its image cannot be rectified to a level camera
+    (lambda c: (c["cameras"]["poses"][1].update(pitch_deg=60.0),
+                c["cameras"]["intrinsics"].update(hfov_deg=60.0, distortion=[-0.3, 0.1, 0, 0, 0])),
+     "camera 2: field of view too wide to rectify to a level camera"),
+    (lambda c: c["people"].update(count=17, radius=0.1),
+     "people.count: silhouettes store one bit per person in a 16-bit PNG; expected at most 16, got 17"),
+])
+def test_a_scene_that_cannot_be_rendered_is_refused_before_any_work(tmp_path, capsys, edit, message):
+    import yaml
+
+    from scene import scene_path
+
+    config = yaml.safe_load(scene_path("lab").read_text())
+    edit(config)
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump(config))
+    code, line = run(capsys, str(path), "--out", str(tmp_path / "out"), "--workers", "0")
+    assert code == 2 and line == f"camtask render: error: {message}"
+    assert not (tmp_path / "out").exists()
+
+
 def test_unwritable_output(tmp_path, capsys):
     (tmp_path / "file").write_text("x")
     code, line = run(capsys, "lab", "--out", str(tmp_path / "file" / "sub"), "--workers", "0")

@@ -6,10 +6,13 @@ import xml.etree.ElementTree as ET
 import cv2
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
+from scene import Room
 from testbed.cli import main
 from testbed.dataset import read_calibration, read_people
-from testbed.wildtrack import CELL, boxes, position_id
+from testbed.wildtrack import CELL, boxes, ground_grid, position_id
 
 
 def test_boxes_of_a_hand_made_mask():
@@ -20,6 +23,20 @@ def test_boxes_of_a_hand_made_mask():
                                                  [[-1, -1, -1, -1], [0, 4, 0, 4]]])
 
 
+@given(st.sampled_from([Room.rectangle(6.7056, 5.7912, 2.7), Room.circle(3.0)]),
+       st.floats(0, 1), st.floats(0, 1))
+def test_position_ids_decode_to_the_cell_of_every_point_of_the_room(room, u, v):
+    # the circle's world origin is its centre: the grid starts at the bounds' corner
+    (ox, oy), width, height = ground_grid(room.polygon.bounds)
+    minx, miny, maxx, maxy = room.polygon.bounds
+    x, y = minx + u * (maxx - minx) * 0.999999, miny + v * (maxy - miny) * 0.999999
+    pid = int(position_id([[x, y]], width, (ox, oy))[0])
+    gx, gy = pid % width, pid // width
+    assert 0 <= pid < width * height
+    assert ox + gx * CELL <= x + 1e-9 and x < ox + (gx + 1) * CELL + 1e-9
+    assert oy + gy * CELL <= y + 1e-9 and y < oy + (gy + 1) * CELL + 1e-9
+
+
 @pytest.mark.render
 def test_export_wildtrack(tmp_path, capsys):
     data, out = tmp_path / "data", tmp_path / "wild"
@@ -28,7 +45,8 @@ def test_export_wildtrack(tmp_path, capsys):
     assert main(["export", "wildtrack", str(data), str(out), "--episode", "0"]) == 0
     ep = data / "episode_0000"
     grid = json.loads((out / "grid.json").read_text())
-    assert grid["grid_width"] == 269 and grid["grid_height"] == 232 and grid["views"] == {"0": 1, "1": 6, "2": 12}
+    assert grid["grid_width"] == 269 and grid["grid_height"] == 232 and grid["origin_m"] == [0.0, 0.0]
+    assert grid["views"] == {"0": 1, "1": 6, "2": 12}
     people = read_people(ep / "people.csv")
     for f in (0, 1):
         ann = json.loads((out / "annotations_positions" / f"{f:08d}.json").read_text())

@@ -78,6 +78,7 @@ def test_frozen_and_read_only():
 
 
 def _set(config, path, value):
+    """A copy of ``config`` with the key or list index at ``path`` set to ``value``."""
     c = copy.deepcopy(config)
     node = c
     for key in path[:-1]:
@@ -100,6 +101,19 @@ def _set(config, path, value):
     (("cameras", "intrinsics", "distortion"), [0.1, 0.2], r"distortion: expected shape \(5,\)"),
     (("render", "backend"), "vulkan", "render.backend: unknown value 'vulkan'; expected one of egl, osmesa"),
     (("uniform_sets",), {6: [1, 2, 3]}, r"uniform_sets\[6\]: expected 6 distinct camera numbers"),
+    (("uniform_sets",), {6: 3}, r"uniform_sets\[6\]: expected a list of 6 camera numbers, got 3"),
+    (("uniform_sets",), {2: [1, "a"]}, r"uniform_sets\[2\]: expected an integer, got 'a'"),
+    (("uniform_sets",), {2: [1, 1.7]}, r"uniform_sets\[2\]: expected an integer, got 1.7"),
+    (("cameras", "poses", 0, "yaw_deg"), None, r"cameras.poses\[0\].yaw_deg: expected a number, got None"),
+    (("cameras", "poses", 0, "yaw_deg"), "abc", r"cameras.poses\[0\].yaw_deg: expected a number, got 'abc'"),
+    (("cameras", "poses", 0, "yaw_deg"), [1, 2], r"cameras.poses\[0\].yaw_deg: expected a number"),
+    (("cameras", "poses", 2, "pitch_deg"), float("nan"), r"cameras.poses\[2\].pitch_deg: expected a finite number"),
+    (("cameras", "poses", 2, "pitch_deg"), 120, r"cameras.poses\[2\].pitch_deg: expected a pitch in \(-90, 90\)"),
+    (("people", "radius"), True, r"people.radius: expected a number, got True"),
+    (("people", "radius"), "0.25", r"people.radius: expected a number, got '0.25'"),
+    (("people", "colours"), [[0.5, 0, 0]] * 3, r"people.colours: expected at least 3 RGB triples of integers"),
+    (("people", "count"), 200, r"people.count: 200 people of radius 0.25 m do not fit in the room; expected at most 49"),
+    (("name",), None, r"name: expected a non-empty string, got None"),
 ])
 def test_bad_scene_fields(lab_config, path, value, match):
     with pytest.raises(ValueError, match=match):
@@ -140,3 +154,30 @@ def test_missing_file_and_camera_validation(tmp_path):
         load_scene(tmp_path / "nope.yaml")
     with pytest.raises(ValueError, match="camera.R: expected a rotation matrix"):
         Camera(1, np.eye(3), np.zeros(5), 2 * np.eye(3), np.zeros(3), 640, 480)
+
+
+def test_cameras_are_in_number_order_whatever_the_files_order(lab_config):
+    # the loop, the uniform sets and the top view index cameras by number - 1
+    poses = copy.deepcopy(lab_config["cameras"]["poses"])
+    poses[0], poses[8] = poses[8], poses[0]
+    swapped = Scene.from_config(_set(lab_config, ("cameras", "poses"), poses))
+    lab = Scene.from_config(lab_config)
+    assert [c.number for c in swapped.cameras] == list(range(1, 17))
+    for got, want in zip(swapped.floor_poses(), lab.floor_poses()):
+        np.testing.assert_array_equal(got, want)
+    for a, b in zip(swapped.cameras, lab.cameras):
+        np.testing.assert_array_equal(a.R, b.R)
+        np.testing.assert_array_equal(a.t, b.t)
+
+
+def test_a_ring_with_poses_is_refused():
+    config = yaml.safe_load(scene_path("circle").read_text())
+    config["cameras"]["poses"] = []
+    with pytest.raises(ValueError, match="cameras: expected either ring or intrinsics and poses, not both"):
+        Scene.from_config(config)
+
+
+def test_no_people_at_given_positions(lab_config):
+    config = _set(_set(lab_config, ("people", "count"), 0), ("people", "positions"), [])
+    scene = Scene.from_config(config)
+    assert scene.people.count == 0 and scene.people.positions.shape == (0, 2)

@@ -63,6 +63,7 @@ def check_positive(name: str, value: int) -> int:
 def build_config(args: argparse.Namespace):
     """Validate the arguments (no rendering); return the :class:`EpisodeConfig` and its scene."""
     from pipeline.params import load_params
+    from pipeline.rectify import check_rectifiable
     from render.renderer import check_camera_numbers
     from testbed.cli import check_seed
     from testbed.episodes import (
@@ -84,7 +85,8 @@ def build_config(args: argparse.Namespace):
     if not scene.is_calibrated:
         raise ValueError(f"scene: {scene.name!r} has floor-plane cameras only; rendering needs calibrated cameras")
     check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])
-    silhouette_dtype(scene.people.count)
+    silhouette_dtype(scene.people.count, "--people" if args.people is not None else "people.count")
+    check_rectifiable(scene.cameras)
     return config, scene
 
 

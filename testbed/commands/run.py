@@ -40,6 +40,7 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
 def prepare(args):
     """Validate the arguments and draw the walk: (scene, config, params, truth, sensor rng)."""
     from pipeline import load_params
+    from pipeline.rectify import check_rectifiable
     from scene import load_scene
     from testbed.cli import check_seed
     from testbed.episode import walk, with_people
@@ -52,8 +53,10 @@ def prepare(args):
     if not scene.is_calibrated:
         raise ValueError(f"SCENE: {scene.name!r} has floor-plane cameras only; `camtask run` renders "
                          "calibrated cameras (use `camtask study` for the circular simulation)")
+    check_rectifiable(scene.cameras)
     if scene.people.count == 0:
-        raise ValueError("--people: expected at least 1 person to track, got 0")
+        option = "--people" if args.people is not None else f"people.count of {args.scene}"
+        raise ValueError(f"{option}: expected at least 1 person to track, got 0")
     config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback).check(len(scene.cameras))
     params = load_params(args.params)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
