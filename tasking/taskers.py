@@ -10,8 +10,9 @@ object centres. The hull of a set S is ``room - union(wedges[S])``, so
   H shrinks, which is what lazy (CELF) greedy relies on.
 
 Greedy and lazy greedy compute gains with the same GEOS operation on the same hull, so
-they see identical floating-point numbers and make the identical choice (ties go to the
-lowest camera index). Areas are of the raw hull, before small-polygon removal.
+they see identical floating-point numbers and make the identical choice: gains within
+``LAZY_TOL`` of the room's area of the largest count as tied, and the lowest camera
+index goes (as in removals and the fan-table path), so overlay rounding cannot decide. Areas are of the raw hull, before small-polygon removal.
 
 >>> from shapely.geometry import Point
 >>> room = Point(0, 0).buffer(1.0, quad_segs=32)
@@ -128,10 +129,12 @@ def greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones=None
     avail = np.ones(wedges.size, dtype=bool)
     avail[list(start)] = False
     h = hull_from_wedges(wedges, room, list(start)) if hull is None else hull
+    tol = LAZY_TOL * room.area
     chosen = []
     for _ in range(k):
         cand = np.flatnonzero(avail)
-        best = int(cand[np.argmax(gains(h, cand))])  # first max: lowest index
+        g = gains(h, cand)
+        best = int(cand[np.flatnonzero(g >= g.max() - tol)[0]])   # ties within tol: lowest index
         h = h.difference(wedges[best])
         avail[best] = False
         chosen.append(best)
@@ -172,15 +175,21 @@ def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones
             near = []
             while heap and -heap[0][0] >= -neg - tol:
                 near.append(heapq.heappop(heap))
-            stale = [e for e in near if e[2] != rnd]
+            if all(e[2] == rnd for e in near):
+                # c and the entries within tol of its gain are tied: the lowest index wins
+                tied = [(neg, c, stamp), *near]
+                best = min(tied, key=lambda e: e[1])
+                for e in tied:
+                    if e is not best:
+                        heapq.heappush(heap, e)
+                c = best[1]
+                break
             for e in near:
                 if e[2] == rnd:
                     heapq.heappush(heap, e)
                 else:
                     g = float(gain(h, e[1])[0])
                     heapq.heappush(heap, (-g, e[1], rnd))
-            if not stale:
-                break
             heapq.heappush(heap, (neg, c, stamp))
         chosen.append(c)
         h = h.difference(wedges[c]) if final_hull or rnd < k - 1 else None

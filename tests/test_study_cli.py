@@ -102,6 +102,10 @@ def test_seed_changes_numbers(capsys):
     (("moving", "--update-every", "0"), "--update-every: expected integers >= 1"),
     (("static", "--plot", "fig.jpg"), "--plot: expected a .png"),
     (("static", "--seed", "-1"), "--seed: expected an integer in 0..4294967295, got -1"),
+    (("static", "--plot", ".png"), "--plot: expected a .png file name, got '.png'"),
+    (("static", "--k", "1-3000000"), "--k: a range of at most 100000 values, got '1-3000000'"),
+    (("cameras", "--cameras", "2,4,8", "--limit-cameras", "8"),
+     "--limit-cameras: expected more cameras than the largest --cameras (8), got 8"),
 ])
 def test_bad_input_is_one_line(capsys, argv, message):
     assert cli.main(["study", *argv, "--workers", "0", "--no-progress"]) == 2
@@ -117,3 +121,22 @@ def test_unreachable_scheduler_fails_fast(capsys):
     assert code == 2
     assert err.startswith("camtask study: error: scheduler: cannot reach a Dask scheduler")
     assert "\n" not in err
+
+
+def test_a_plot_in_a_new_folder_is_made_whole_and_a_plot_under_a_file_refused_first(capsys, tmp_path):
+    png = tmp_path / "figs" / "new" / "cameras.png"
+    doc = run_json(capsys, *CAMERAS, "--workers", "0", "--plot", str(png))
+    assert doc["records"] and png.stat().st_size > 1000
+    assert [p.name for p in png.parent.iterdir()] == ["cameras.png"]        # no temporary file left
+    (tmp_path / "file").write_text("x")
+    assert cli.main(["study", *CAMERAS, "--workers", "0", "--plot", str(tmp_path / "file" / "c.png")]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.strip() == (
+        f"camtask study: error: --plot: cannot write to {tmp_path / 'file'} ({tmp_path / 'file'} is not a writable folder)")
+
+
+def test_clustering_draws_the_same_whatever_its_place_in_taskers(capsys):
+    args = ("static", "--objects", "6", "--k", "2,4,6", "--trials", "4", "--workers", "0")
+    alone = run_json(capsys, *args, "--taskers", "clustering")["records"]
+    second = run_json(capsys, *args, "--taskers", "greedy,uniform,clustering")["records"]
+    assert alone == [r for r in second if r["tasker"] == "clustering"]

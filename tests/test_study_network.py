@@ -24,6 +24,18 @@ def test_tracking_records_and_figure(capsys, tmp_path):
     assert png.stat().st_size > 5000
 
 
+def test_tracking_mse_only_over_trials_with_a_matched_position(capsys):
+    # one step: no track is confirmed yet, so no position is matched and there is no MSE
+    doc = run_json(capsys, "tracking", "--pairs", "uniform:6", "--steps", "1", "--objects", "1",
+                   "--trials", "2", "--workers", "0")
+    (r,) = doc["records"]
+    assert r["mse"] is None and r["mse_sem"] is None and r["mse_trials"] == 0 and r["mota"] <= 0
+    assert main(["study", "tracking", "--pairs", "uniform:6", "--steps", "1", "--objects", "1",
+                 "--trials", "2", "--workers", "0", "--no-progress"]) == 0
+    table = capsys.readouterr().out
+    assert "1 walking disc (mean" in table and "MSE over the 0 of 2 trials with a matched position" in table
+
+
 def test_tracking_same_numbers_for_any_worker_count(capsys):
     args = ("tracking", "--pairs", "incremental:3,uniform:5", "--steps", "8", "--trials", "2", "--seed", "3")
     a = run_json(capsys, *args, "--workers", "0")["records"]
@@ -42,6 +54,8 @@ def test_both_networks_see_the_same_walk():
     (["tracking", "--pairs", "best:4"], "--pairs: expected TASKER:K"),
     (["tracking", "--pairs", "incremental:17"], "exceeds the 16 candidate cameras"),
     (["tracking", "--steps", "0"], "--steps: expected an integer >= 1"),
+    (["tracking", "--pairs", "incremental:4,uniform:4", "--m", "5"],
+     "--m: expected at most the smallest incremental k = 4, got 5"),
     (["lab", "--k", "17"], "--k: 17 cameras exceed the scene's 16"),
     (["lab", "--taskers", "optimal"], "--taskers: unknown value 'optimal'"),
     (["lab", "--people", "0"], "--people: expected an integer >= 1"),

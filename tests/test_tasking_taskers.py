@@ -393,3 +393,13 @@ def test_union_areas_many_cameras_uses_the_cover_table():
     sets[2, [5]] = True
     ref = [ROOM.area - hull_from_wedges(w, ROOM, np.flatnonzero(s)).area for s in sets]
     assert np.allclose(ua(sets), ref, rtol=0, atol=1e-10 * ROOM.area)
+
+
+def test_greedy_ties_go_to_the_lowest_index_whatever_the_rounding():
+    # no estimates: every camera removes as much as the next, up to overlay rounding
+    from testbed.studies import core
+
+    room = core.circle_room(1.0)
+    xy, yaw = core.circle_cameras(8)
+    for tasker in ("greedy", "lazy_greedy", "optimal"):
+        assert choose_cameras(tasker, 3, xy, yaw, core.FOV, np.zeros((0, 2)), 0.1, room).tolist() == [0, 1, 2]

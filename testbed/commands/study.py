@@ -13,6 +13,7 @@ import sys
 import time
 
 from testbed.cli import check_seed
+from testbed.output import check_output_file
 from testbed.parallel import default_workers, open_client, run_tasks
 
 STUDY_HELP = {
@@ -57,8 +58,8 @@ def run(args) -> int:
     check_seed(args.seed)
     if args.workers is not None and args.workers < 0:
         raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
-    if args.plot and not args.plot.lower().endswith(".png"):
-        raise ValueError(f"--plot: expected a .png file name, got {args.plot!r}")
+    if args.plot:
+        check_output_file("--plot", args.plot, ".png")
     opts = mod.parse(args)
     from testbed.studies.core import TASKING_BACKEND
 
@@ -79,13 +80,16 @@ def run(args) -> int:
         "tasking_backend": TASKING_BACKEND,
         "command": "camtask " + " ".join(sys.argv[1:]) if sys.argv and "camtask" in sys.argv[0] else None,
     }
-    if args.plot:
-        mod.plot(result, args.plot)
+    # the results first: a figure that cannot be drawn loses no hour of trials
     if args.json:
         json.dump(result, sys.stdout, indent=1, allow_nan=False)
         sys.stdout.write("\n")
     else:
         print(mod.format_table(result))
+    sys.stdout.flush()
+    if args.plot:
+        mod.plot(result, args.plot)
+    if not args.json:
         print(f"\n{args.study}: {args.trials} trials, seed {args.seed}, {elapsed:.1f} s"
               + (f", plot {args.plot}" if args.plot else ""))
     return 0

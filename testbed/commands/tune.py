@@ -41,15 +41,18 @@ def run(args) -> int:
     from pipeline.tuning import tune
     from testbed.cli import check_seed
     from testbed.commands.scanlines import default_output, episode_dir
+    from testbed.output import check_output_file
 
     if args.trials < 1:
         raise ValueError(f"--trials: expected an integer >= 1, got {args.trials}")
     if args.frames < 1:
         raise ValueError(f"--frames: expected an integer >= 1, got {args.frames}")
     check_seed(args.seed)
+    if args.plot:
+        check_output_file("--plot", args.plot, ".png")
     start = load_params(args.params)
     render = RenderDir(episode_dir(Path(args.dir)))
-    out = Path(args.out) if args.out else default_output(render.root, "tuned_params.yaml")
+    out = check_output_file("--out", args.out) if args.out else default_output(render.root, "tuned_params.yaml")
     n = min(args.frames, len(render))
     background = render.background()
     frames = np.stack([render.frames(i) for i in range(n)])
@@ -82,13 +85,11 @@ def run(args) -> int:
 
 def plot_history(f1, path) -> None:
     """F1 per trial and best so far, as a PNG written atomically."""
-    import io
-
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from pipeline.files import write_atomic
+    from testbed.output import save_figure
 
     f1 = np.asarray(f1)
     fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
@@ -101,9 +102,4 @@ def plot_history(f1, path) -> None:
     ax.legend(loc="lower right")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    png = io.BytesIO()
-    try:
-        fig.savefig(png, format="png")
-    finally:
-        plt.close(fig)
-    write_atomic(path, png.getvalue())
+    save_figure(fig, path, dpi=100)

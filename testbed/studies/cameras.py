@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from testbed.output import save_figure
+
 from . import core
 from .limit import limit_residual
 
@@ -49,6 +51,9 @@ def parse(args) -> dict:
             raise ValueError(f"--limit-cameras: expected an integer >= 2 or 'inf', got {args.limit_cameras!r}") from None
         if limit < 2:
             raise ValueError(f"--limit-cameras: expected an integer >= 2 or 'inf', got {limit}")
+        if limit <= max(cameras):                 # the limit stands for infinitely many cameras
+            raise ValueError(f"--limit-cameras: expected more cameras than the largest --cameras "
+                             f"({max(cameras)}), got {limit}")
     if not 0 < args.radius < 0.5:
         raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
     if not 0 < args.quadrature <= 0.05:
@@ -193,7 +198,8 @@ def plot(result: dict, path: str) -> None:
         axes[2].loglog([n[k] for k in ok], [e[k] for k in ok], "o-", ms=3, color=color, label=f"{m}")
     axes[1].set(xlabel="number of cameras N", ylabel="residual / limit residual",
                 title="Fig. 6: residual scaled by the limit (objects >= 2)")
-    axes[1].legend(title="objects", fontsize=7, ncol=2)
+    if axes[1].get_legend_handles_labels()[0]:    # no curve when every limit residual is 0
+        axes[1].legend(title="objects", fontsize=7, ncol=2)
     nn = np.array([min(r["cameras"] for r in recs if not r["limit"]),
                    max(r["cameras"] for r in recs if not r["limit"])], float)
     one = [r for r in recs if r["objects"] == objects[0] and not r["limit"]]
@@ -204,5 +210,4 @@ def plot(result: dict, path: str) -> None:
                 title="excess over the limit")
     axes[2].legend(title="objects", fontsize=7, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    save_figure(fig, path)

@@ -19,6 +19,7 @@ from shapely.geometry import Polygon
 
 from scene.motion import circle_polygon
 from tasking import TASKERS, choose_cameras, polygon_centres, prune_small, visual_hull_of_discs
+from testbed.output import save_figure
 
 #: Where the taskers come from (recorded in every study's metadata).
 TASKING_BACKEND = "tasking"
@@ -83,6 +84,11 @@ def hull_residual(camera_xy, camera_yaw, centers, radius, room) -> tuple[float, 
     return (hull.area - total) / obj, (sum(p.area for p in polys) - total) / obj, polys
 
 
+#: The most values one range of a list option may hold (a typo like ``2-200000000`` is an
+#: error, not gigabytes of settings).
+MAX_RANGE = 100_000
+
+
 def parse_ints(name: str, text, *, minimum: int = 1) -> list[int]:
     """Parse ``"1,2,5-8"`` into a sorted list of distinct ints >= ``minimum``."""
     if isinstance(text, (list, tuple)):
@@ -96,6 +102,8 @@ def parse_ints(name: str, text, *, minimum: int = 1) -> list[int]:
                 lo, hi = int(a), int(b)
                 if hi < lo:
                     raise ValueError
+                if hi - lo >= MAX_RANGE:
+                    raise OverflowError
                 out.update(range(lo, hi + 1))
             else:
                 out.add(int(part))
@@ -103,6 +111,8 @@ def parse_ints(name: str, text, *, minimum: int = 1) -> list[int]:
             raise ValueError(
                 f"--{name}: expected integers like '2,3,4' or '2-8', got {text!r}"
             ) from None
+        except OverflowError:
+            raise ValueError(f"--{name}: a range of at most {MAX_RANGE} values, got {part!r}") from None
     bad = [v for v in out if v < minimum]
     if bad:
         raise ValueError(f"--{name}: expected integers >= {minimum}, got {min(bad)}")
@@ -161,5 +171,4 @@ def plot_taskers(records: list[dict], path: str, title: str, ylabel: str, *, log
     ax.set(xlabel="number of cameras tasked k", ylabel=ylabel, title=title)
     ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    save_figure(fig, path)

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from testbed.output import save_figure
+
 from . import core
 
 STUDY_ID = 2
@@ -159,5 +161,4 @@ def plot(result: dict, path: str) -> None:
         ax.set_yscale("log")
         ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    save_figure(fig, path)

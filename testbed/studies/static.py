@@ -56,7 +56,8 @@ def run_trials(start, stop, opts, seed) -> np.ndarray:
             for j, k in enumerate(opts["k"]):
                 S = core.choose_cameras(tasker, k, xy, yaw, core.FOV, centers, r, room,
                                         max_subsets=opts["max_subsets"],
-                                        rng=core.trial_rng(seed, STUDY_ID, 1 + i, k, t))
+                                        # keyed by the tasker's name, not its place in --taskers
+                                        rng=core.trial_rng(seed, STUDY_ID, 1 + core.TASKERS.index(tasker), k, t))
                 out[t - start, i, j] = core.hull_residual(xy[S], yaw[S], centers, r, room)[1]
     return out
 

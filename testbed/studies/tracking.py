@@ -21,6 +21,7 @@ import numpy as np
 from scene.motion import random_waypoint
 from tasking.track_metrics import tracking_metrics
 from tasking.tracker import Tracker, TrackerParams
+from testbed.output import save_figure
 
 from . import core
 
@@ -61,6 +62,9 @@ def parse(args) -> dict:
         raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
     if args.speed <= 0:
         raise ValueError(f"--speed: expected a number > 0, got {args.speed}")
+    swapped = [k for name, k in pairs if name == "incremental"]
+    if swapped and args.m > min(swapped):
+        raise ValueError(f"--m: expected at most the smallest incremental k = {min(swapped)}, got {args.m}")
     return {"pairs": pairs, "objects": args.objects, "steps": args.steps,
             "update_every": args.update_every, "m": args.m, "radius": args.radius, "speed": args.speed,
             "feedback": args.feedback}
@@ -122,17 +126,25 @@ def run(opts: dict, trials: int, seed: int, runner) -> dict:
     for i, (tasker, k) in enumerate(opts["pairs"]):
         rows = [trial[i] for trial in per_trial]
         rec = {"tasker": tasker, "k": k, "trials": trials}
-        for f in ("mse", "mota", "idf1"):
-            rec[f], rec[f + "_sem"] = core.mean_sem([np.nan_to_num(r[f], nan=1.0) for r in rows])
+        for f in ("mota", "idf1"):
+            rec[f], rec[f + "_sem"] = core.mean_sem([r[f] for r in rows])
+        # a trial whose tracks never came near a true object has no matched position
+        mse = [r["mse"] for r in rows if np.isfinite(r["mse"])]
+        rec["mse"], rec["mse_sem"] = core.mean_sem(mse) if mse else (None, None)
+        rec["mse_trials"] = len(mse)
         records.append(rec)
     return {"records": records, "figure_trial": 0, "seed": seed, "opts": opts}
 
 
 def format_table(result: dict) -> str:
-    lines = ["Tracking on hull polygon centres, six walking discs (mean over trials):",
+    objects = result["opts"]["objects"]
+    lines = [f"Tracking on hull polygon centres, {objects} walking disc{'s' * (objects != 1)} (mean over trials):",
              f"{'tasker':>12} {'k':>3} {'MSE':>9} {'MOTA':>7} {'IDF1':>7}"]
     for r in result["records"]:
-        lines.append(f"{r['tasker']:>12} {r['k']:>3} {r['mse']:9.4f} {r['mota']:7.3f} {r['idf1']:7.3f}")
+        mse = "-" if r["mse"] is None else f"{r['mse']:.4f}"
+        lines.append(f"{r['tasker']:>12} {r['k']:>3} {mse:>9} {r['mota']:7.3f} {r['idf1']:7.3f}"
+                     + (f"  (MSE over the {r['mse_trials']} of {r['trials']} trials with a matched position)"
+                        if r["mse_trials"] < r["trials"] else ""))
     return "\n".join(lines)
 
 
@@ -157,10 +169,9 @@ def plot(result: dict, path: str) -> None:
         ax.set_aspect("equal")
         ax.set(xlim=(-1.05, 1.05), ylim=(-1.05, 1.05))
         ax.legend(loc="lower right", fontsize=7)
-    fig.suptitle("Fig. 14: one of six objects, true and estimated tracks")
+    fig.suptitle(f"Fig. 14: one of {opts['objects']} objects, true and estimated tracks")
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def follow(truth: np.ndarray, track_ids, track_xy, gate: float) -> np.ndarray:

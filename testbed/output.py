@@ -1,0 +1,49 @@
+"""Output files named on the command line: checked before any work, written atomically.
+
+A long run should not end in "No such file or directory" for its last file: commands
+check every output file they are given before they start (:func:`check_output_file`),
+and figures are drawn to memory and written through a temporary file beside the target
+(:func:`save_figure`), so an interrupted run leaves no truncated PNG.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+
+from pipeline.files import write_atomic
+
+
+def check_output_file(option: str, path: str | os.PathLike, suffix: str | None = None) -> Path:
+    """``path`` as a Path, or a one-line ValueError naming ``option``: a file name (with
+    ``suffix``, e.g. ``".png"``, any case, when given) whose folder exists or can be made.
+
+    >>> check_output_file("--plot", "out/fig.png", ".png")
+    PosixPath('out/fig.png')
+    """
+    p = Path(path)
+    if suffix is not None and p.suffix.lower() != suffix:
+        raise ValueError(f"{option}: expected a {suffix} file name, got {str(path)!r}")
+    if p.is_dir():
+        raise ValueError(f"{option}: {p} is a folder; expected a file name")
+    folder = p.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"{option}: cannot write to {p.parent} ({folder} is not a writable folder)")
+    return p
+
+
+def save_figure(fig, path: str | os.PathLike, dpi: float = 80) -> None:
+    """Draw matplotlib figure ``fig`` as a PNG to ``path`` (its folder made when missing),
+    atomically, and close the figure."""
+    import matplotlib.pyplot as plt
+
+    png = io.BytesIO()
+    try:
+        fig.savefig(png, format="png", dpi=dpi)
+    finally:
+        plt.close(fig)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    write_atomic(path, png.getvalue())
