@@ -36,8 +36,9 @@ def temp_folder(parent: str | os.PathLike, prefix: str, suffix: str = ".tmp") ->
 
 def write_atomic(path: str | os.PathLike, data: bytes | Iterable[bytes]) -> None:
     """Write ``data`` (bytes, or pieces of them in order) to ``path`` through a temporary
-    file in the same folder and ``os.replace``."""
+    file in the same folder (made when missing) and ``os.replace``."""
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     tmp, fd = _create(path.parent, f".{path.name}.", ".tmp",
                       lambda p: os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
     try:

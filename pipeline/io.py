@@ -26,25 +26,49 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pg
 def load_calibration(path: str | os.PathLike, number: int | None = None) -> Camera:
     """A :class:`Camera` from an OpenCV calibration file (YAML/XML, FileStorage).
 
-    number : camera number; by default parsed from ``camNN`` in the file name, else 1.
+    number : camera number; by default the file's ``camera_number`` (``camtask render``
+    writes it), else ``camNN`` in the file name, else 1.
+    Every problem is a one-line ValueError naming the file and the key.
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"calibration: no such file {str(path)!r}")
-    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
     try:
-        def mat(key, required=True):
-            node = fs.getNode(key)
-            if node.empty():
-                if required:
-                    raise ValueError(f"calibration: {path.name} has no {key!r}")
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+        opened = fs.isOpened()
+    except (cv2.error, SystemError):
+        opened = False
+    if not opened:
+        raise ValueError(f"calibration: {path.name} is not an OpenCV FileStorage file (YAML or XML "
+                         "with camera_matrix, distortion_coefficients, rvec, tvec, image_width, image_height)")
+    try:
+        def node(key, required=True):
+            n = fs.getNode(key)
+            if n.empty() and required:
+                raise ValueError(f"calibration: {path.name} has no {key!r}")
+            return None if n.empty() else n
+
+        def matrix(key, size):
+            n = node(key)
+            m = n.real() if n.isReal() or n.isInt() else n.mat()
+            m = None if m is None else np.asarray(m, float).ravel()
+            if m is None or (size is not None and m.size != size) or not np.all(np.isfinite(m)):
+                raise ValueError(f"calibration: {path.name} {key}: expected {size or 'up to 5'} finite numbers")
+            return m
+
+        def integer(key, required=True):
+            n = node(key, required)
+            if n is None:
                 return None
-            return node.real() if node.isReal() or node.isInt() else node.mat()
-        K = np.asarray(mat("camera_matrix"), float)
-        dist = np.asarray(mat("distortion_coefficients"), float).ravel()
-        rvec = np.asarray(mat("rvec"), float).reshape(3)
-        tvec = np.asarray(mat("tvec"), float).reshape(3)
-        width, height = int(mat("image_width")), int(mat("image_height"))
+            if not n.isInt():
+                raise ValueError(f"calibration: {path.name} {key}: expected an integer")
+            return int(n.real())
+
+        K = matrix("camera_matrix", 9).reshape(3, 3)
+        dist = matrix("distortion_coefficients", None)
+        rvec, tvec = matrix("rvec", 3), matrix("tvec", 3)
+        width, height = integer("image_width"), integer("image_height")
+        stored_number = integer("camera_number", required=False)
     finally:
         fs.release()
     if dist.size < 5:
@@ -55,10 +79,18 @@ def load_calibration(path: str | os.PathLike, number: int | None = None) -> Came
                              f"(k1 k2 p1 p2 k3), got {dist.size} non-zero")
         dist = dist[:5]
     if number is None:
-        m = re.search(r"cam(\d+)", path.stem)
-        number = int(m.group(1)) if m else 1
+        number = stored_number if stored_number is not None else number_in_name(path, default=1)
     R, _ = cv2.Rodrigues(rvec)
-    return Camera(number, K, dist, R, tvec, width, height)
+    try:
+        return Camera(number, K, dist, R, tvec, width, height)
+    except ValueError as exc:
+        raise ValueError(f"calibration: {path.name}: {exc}") from None
+
+
+def number_in_name(path: str | os.PathLike, default: int | None = None) -> int | None:
+    """The camera number ``NN`` of a ``camNN`` file name, else ``default``."""
+    m = re.search(r"cam(\d+)", Path(path).stem)
+    return int(m.group(1)) if m else default
 
 
 def read_rgb(path: str | os.PathLike) -> np.ndarray:
@@ -93,7 +125,8 @@ class RenderDir:
         calib = sorted((self.root / "calibration").glob("cam*.yaml"))
         if not calib:
             raise ValueError(f"render directory: {self.root} has no calibration/camNN.yaml files")
-        self.cameras = tuple(load_calibration(p) for p in calib)
+        # numbered as the files (and so the frames/camNN folders) are named
+        self.cameras = tuple(load_calibration(p, number_in_name(p)) for p in calib)
         self.names = tuple(c.name for c in self.cameras)
         first = self.root / "frames" / self.names[0]
         self.frame_names = tuple(sorted(p.name for p in first.glob("*.png")))
@@ -159,8 +192,10 @@ def iter_video_frames(source: str | os.PathLike):
 
 
 def save_npz_atomic(path: str | os.PathLike, **arrays) -> None:
-    """``np.savez_compressed`` to a temporary file beside ``path``, then os.replace."""
+    """``np.savez_compressed`` to a temporary file beside ``path`` (its folder made when
+    missing), then os.replace."""
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
     try:
         np.savez_compressed(tmp, **arrays)

@@ -74,6 +74,9 @@ class Camera:
             object.__setattr__(self, name, readonly(check_array(f"camera.{name}", getattr(self, name), shape)))
         if not np.allclose(self.R @ self.R.T, np.eye(3), atol=1e-6) or np.linalg.det(self.R) < 0:
             raise ValueError("camera.R: expected a rotation matrix")
+        K = self.K
+        if not (K[0, 0] > 0 and K[1, 1] > 0 and K[1, 0] == 0 and np.array_equal(K[2], [0.0, 0.0, 1.0])):
+            raise ValueError("camera.K: expected [[fx, s, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0")
 
     @staticmethod
     def from_pose(number, position_world, yaw, pitch, width, height, hfov, dist, principal=None) -> Camera:

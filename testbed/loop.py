@@ -231,7 +231,8 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
 
 
 def summarise(results: list[FrameResult], scene: Scene) -> dict:
-    """Means over the run and tracking metrics against the true positions."""
+    """Means over the run and tracking metrics against the true positions (``mse`` and
+    ``motp`` None when no track was ever matched to a person)."""
     n = len(results)
     switches = sum(len(r.switched_on) + len(r.switched_off) for r in results)
     people = len(results[0].truth) if n else 0
@@ -239,6 +240,8 @@ def summarise(results: list[FrameResult], scene: Scene) -> dict:
         [np.arange(people)] * n, [r.truth for r in results],
         [r.track_ids for r in results], [r.track_xy for r in results],
         max_distance=tracker_params(scene).gate) if n and people else {}
+    # no matched position, no mean error: null in JSON, which has no NaN
+    tracking = {k: None if isinstance(v, float) and not np.isfinite(v) else v for k, v in tracking.items()}
     return {
         "frames": n,
         "hull_area": float(np.mean([r.hull_area for r in results])) if n else float("nan"),

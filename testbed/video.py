@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import numpy as np
 
 
 class VideoWriter:
-    """Collects RGB frames into ``path`` (H.264 MP4); the file appears only when closed cleanly.
+    """Collects RGB frames into ``path`` (H.264 MP4, a ``.mp4`` name whose folder exists or
+    can be made); the file appears only when closed cleanly.
 
     Frames of a different size than the first are padded or cropped to it.
     """
@@ -17,9 +17,9 @@ class VideoWriter:
     def __init__(self, path: str | os.PathLike, fps: float):
         import imageio_ffmpeg
 
-        self.path = Path(path)
-        if not self.path.parent.exists():
-            raise FileNotFoundError(f"--video: folder {self.path.parent} does not exist")
+        from testbed.output import check_output_file
+
+        self.path = check_output_file("--video", path, ".mp4")
         self.tmp = self.path.with_name(f".{self.path.stem}.partial{self.path.suffix}")
         self.fps = fps
         self._ffmpeg = imageio_ffmpeg
@@ -31,6 +31,7 @@ class VideoWriter:
         if self._gen is None:
             h, w = frame.shape[:2]
             self._size = (w - w % 2, h - h % 2)
+            self.path.parent.mkdir(parents=True, exist_ok=True)
             self._gen = self._ffmpeg.write_frames(
                 str(self.tmp), self._size, fps=self.fps, codec="libx264", pix_fmt_in="rgb24",
                 quality=7, macro_block_size=2, ffmpeg_log_level="error")
@@ -44,10 +45,14 @@ class VideoWriter:
     def close(self, ok: bool = True) -> None:
         if self._gen is not None:
             self._gen.close()
-        if ok and self._gen is not None:
+        # imageio-ffmpeg does not report ffmpeg's exit status: an empty file is a failure
+        wrote = self.tmp.exists() and self.tmp.stat().st_size > 0
+        if ok and self._gen is not None and wrote:
             os.replace(self.tmp, self.path)
-        elif self.tmp.exists():
-            self.tmp.unlink()
+            return
+        self.tmp.unlink(missing_ok=True)
+        if ok and self._gen is not None:
+            raise RuntimeError(f"--video: ffmpeg wrote nothing to {self.path}")
 
     def __enter__(self):
         return self

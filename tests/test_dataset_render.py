@@ -402,7 +402,7 @@ def test_saved_scanlines_come_from_the_saved_frames_and_masks(dataset):
     assert saved_gt.any()
 
 
-def test_scanlines_and_tune_leave_an_episode_as_its_manifest_says(dataset, tmp_path, capsys):
+def test_scanlines_and_tune_leave_an_episode_as_its_manifest_says(dataset, tmp_path, capsys, monkeypatch):
     """On an episode of a dataset, `camtask scanlines` and `camtask tune` need --out (a
     replaced scanlines.npz failed `camtask verify`); with it, the episode stays intact."""
     ep = dataset / "episode_0000"
@@ -416,6 +416,10 @@ def test_scanlines_and_tune_leave_an_episode_as_its_manifest_says(dataset, tmp_p
     assert "give --out FILE to write tuned_params.yaml elsewhere" in err[1]
     assert main(["tune", str(dataset), "--trials", "1"]) == 2               # two episodes: which one?
     assert f"{dataset} is a dataset of 2 episodes" in capsys.readouterr().err
+    monkeypatch.chdir(ep)                                                     # the episode named "."
+    assert main(["scanlines", "."]) == 2 and main(["tune", ".", "--trials", "1"]) == 2
+    assert capsys.readouterr().err.count(f". is an episode of the dataset {dataset.resolve()}") == 2
+    monkeypatch.chdir(tmp_path)
     assert main(["scanlines", str(ep), "--out", str(tmp_path / "s.npz"), "--json"]) == 0
     assert files_of(dataset) == before
     assert main(["verify", str(dataset)]) == 0

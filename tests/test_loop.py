@@ -103,6 +103,7 @@ def test_people_validation():
     (["--people", "500"], "do not fit in the room"),
     (["--frames", "0"], "--frames: expected a number >= 1"),
     (["--seed", "-1"], "--seed: expected an integer in 0..4294967295, got -1"),
+    (["--video", "x.gif"], "--video: expected a .mp4 file name, got 'x.gif'"),
 ])
 def test_run_bad_input_is_one_line(capsys, argv, match):
     assert main(["run", "lab", *argv]) == 2
@@ -127,6 +128,17 @@ def test_run_end_to_end_json_and_video(tmp_path, capsys):
     assert {"residual", "bits_per_frame", "tracking"} <= set(doc["summary"])
     assert video.stat().st_size > 1000
     assert not list(tmp_path.glob(".*partial*"))
+
+
+def test_run_json_is_strict_json_before_any_track_is_confirmed(tmp_path, capsys):
+    def no_nan(name):
+        raise AssertionError(f"{name} in the JSON document")
+
+    video = tmp_path / "new" / "run.mp4"                       # its folder is made
+    assert main(["run", "lab", "--frames", "2", "--k", "1", "--json", "--video", str(video)]) == 0
+    tracking = json.loads(capsys.readouterr().out, parse_constant=no_nan)["summary"]["tracking"]
+    assert tracking["mse"] is None and tracking["motp"] is None and tracking["matches"] == 0
+    assert video.stat().st_size > 1000
 
 
 @pytest.mark.render

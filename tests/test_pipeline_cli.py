@@ -138,6 +138,7 @@ def test_tune_beats_defaults_on_dark_noisy_scene(tmp_path, render_dir, sequence,
     assert result["start_f1"] == pytest.approx(default_f1)
     assert result["best_f1"] > default_f1 + 0.1
     assert plot.stat().st_size > 1000
+    assert f"--seed 3 --frames 10 --params {start}`" in out.read_text()     # the command that reproduces it
     tuned = load_params(out)
     assert camtask(["scanlines", str(dark), "--params", str(out), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["f1"] == pytest.approx(result["best_f1"])

@@ -84,3 +84,44 @@ def test_bad_labels_and_cameras():
         Pipeline([])
     with pytest.raises(ValueError, match="cameras: expected every camera to have the same resolution"):
         Pipeline([cam(), cam(40, 30)])
+
+
+def _calibration_text(tmp_path, camera_number=None):
+    """The text of a calibration file as ``camtask render`` writes it (camera 5 of the lab)."""
+    from scene import load_scene
+    from testbed.dataset import write_calibration
+
+    path = tmp_path / "written.yaml"
+    write_calibration(path, load_scene("lab").cameras[4])
+    return path.read_text()
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: "hello: [1, 2\n", "bad.yaml is not an OpenCV FileStorage file"),
+    (lambda t: t.replace("image_width: 640", "image_width: abc"), "bad.yaml image_width: expected an integer"),
+    (lambda t: t.replace("image_height: 480\n", ""), "bad.yaml has no 'image_height'"),
+    (lambda t: t.replace("data: [ 1.689", "data: [ 1.689, 0.5", 1).replace("rows: 3\n   cols: 1", "rows: 4\n   cols: 1", 1),
+     "bad.yaml rvec: expected 3 finite numbers"),
+    (lambda t: t.replace("data: [ 702.", "data: [ -702.", 1), r"bad.yaml: camera.K: expected \[\[fx, s, cx\]"),
+])
+def test_a_malformed_calibration_file_is_one_line(tmp_path, edit, message):
+    from pipeline.io import load_calibration
+
+    text = _calibration_text(tmp_path)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(edit(text))
+    with pytest.raises(ValueError, match=message) as info:
+        load_calibration(bad)
+    assert str(info.value).startswith("calibration: ") and "\n" not in str(info.value)
+
+
+def test_the_camera_number_written_in_the_file_counts_over_its_name(tmp_path):
+    from pipeline.io import load_calibration
+
+    text = _calibration_text(tmp_path)
+    for name in ("cam.yaml", "cam0.yaml", "cam07.yaml"):
+        (tmp_path / name).write_text(text)
+        assert load_calibration(tmp_path / name).number == 5
+    (tmp_path / "cam07b.yaml").write_text(text.replace("camera_number: 5\n", ""))
+    assert load_calibration(tmp_path / "cam07b.yaml").number == 7
+    assert load_calibration(tmp_path / "cam07b.yaml", number=3).number == 3

@@ -36,7 +36,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--out: folder {out} is not writable")
     t0 = time.perf_counter()
     results, summary, bearings = execute(scene, config, params, truth, rng, out / "run.mp4")
-    summary.update(seed=args.seed, seconds=round(time.perf_counter() - t0, 1))
+    summary["seed"] = args.seed             # no wall-clock time: same seed, same bytes
+    seconds = round(time.perf_counter() - t0, 1)
     _write_json(out / "summary.json", {"summary": summary, "frames": [r.to_json() for r in results]})
     view = TopView(scene, width=720)
     for r in results:                      # draw every frame so the tracks have their tails
@@ -46,11 +47,11 @@ def run(args: argparse.Namespace) -> int:
     os.replace(tmp, out / "topview.png")
     print(format_summary(summary))
     print(f"\nwrote {out / 'run.mp4'}, {out / 'summary.json'}, {out / 'topview.png'} "
-          f"({summary['seconds']} s)", file=sys.stderr)
+          f"({seconds} s)", file=sys.stderr)
     return 0
 
 
 def _write_json(path: Path, doc: dict) -> None:
     tmp = path.with_name(f".{path.name}.partial")
-    tmp.write_text(json.dumps(doc, indent=1))
+    tmp.write_text(json.dumps(doc, indent=1, allow_nan=False))
     os.replace(tmp, path)

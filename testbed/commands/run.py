@@ -45,10 +45,13 @@ def prepare(args):
     from testbed.cli import check_seed
     from testbed.episode import walk, with_people
     from testbed.loop import LoopConfig
+    from testbed.output import check_output_file
 
     if args.frames < 1:
         raise ValueError(f"--frames: expected a number >= 1, got {args.frames}")
     check_seed(args.seed)
+    if args.video:
+        check_output_file("--video", args.video, ".mp4")
     scene = with_people(load_scene(args.scene), args.people)
     if not scene.is_calibrated:
         raise ValueError(f"SCENE: {scene.name!r} has floor-plane cameras only; `camtask run` renders "
@@ -68,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
     results, summary, _ = execute(scene, config, params, truth, sensor_rng, args.video)
     summary["seed"] = args.seed
     if args.json:
-        json.dump({"summary": summary, "frames": [r.to_json() for r in results]}, sys.stdout, indent=1)
+        json.dump({"summary": summary, "frames": [r.to_json() for r in results]}, sys.stdout, indent=1,
+                  allow_nan=False)
         print()
     else:
         print(format_summary(summary))
@@ -134,6 +138,7 @@ def format_summary(s: dict) -> str:
         f"  camera switches     {s['camera_switches']}",
     ]
     if t:
-        lines.append(f"  tracking            MSE {t['mse']:.4f} m^2  MOTA {t['mota']:.3f}  "
-                     f"MOTP {t['motp']:.3f} m  IDF1 {t['idf1']:.3f}")
+        num = lambda v, digits: "-" if v is None else f"{v:.{digits}f}"
+        lines.append(f"  tracking            MSE {num(t['mse'], 4)} m^2  MOTA {num(t['mota'], 3)}  "
+                     f"MOTP {num(t['motp'], 3)} m  IDF1 {num(t['idf1'], 3)}")
     return "\n".join(lines)

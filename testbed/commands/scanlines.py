@@ -42,8 +42,11 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from pipeline.params import load_params
     from testbed.cli import UsageError
+    from testbed.output import check_output_file
 
     params = load_params(args.params)
+    if args.out:
+        check_output_file("--out", args.out)
     if args.frames is not None and args.frames < 1:
         raise ValueError(f"--frames: expected an integer >= 1, got {args.frames}")
     if args.video is not None:
@@ -95,8 +98,10 @@ def default_output(root: Path, name: str) -> Path:
     ``camtask verify`` fail and ``camtask render --resume`` render the episode again. That
     is a one-line error asking for ``--out``, raised before any work.
     """
-    if root.name.startswith("episode_") and (root.parent / "manifest.json").is_file():
-        raise ValueError(f"--out: {root} is an episode of the dataset {root.parent}, whose manifest.json "
+    real = root.resolve()                           # "." names no episode, its real path does
+    if real.name.startswith("episode_") and (real.parent / "manifest.json").is_file():
+        dataset = root.parent if root.name == real.name else real.parent
+        raise ValueError(f"--out: {root} is an episode of the dataset {dataset}, whose manifest.json "
                          f"checksums its files; give --out FILE to write {name} elsewhere")
     return root / name
 

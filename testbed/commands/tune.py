@@ -68,7 +68,8 @@ def run(args) -> int:
 
         result = tune(render.cameras, background, frames, gt, args.trials, args.seed, start, progress)
     result.best.to_yaml(out, comment=(
-        f"Tuned by `camtask tune {args.dir} --trials {args.trials} --seed {args.seed} --frames {n}`:\n"
+        f"Tuned by `camtask tune {args.dir} --trials {args.trials} --seed {args.seed} --frames {n}"
+        + (f" --params {args.params}" if args.params else "") + "`:\n"
         f"scanline F1 {result.best_f1:.4f} (starting parameters {result.baseline_f1:.4f})"))
     if args.plot:
         plot_history(result.f1, args.plot)
