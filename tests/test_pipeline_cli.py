@@ -79,7 +79,7 @@ def test_scanlines_writes_nothing_on_error(tmp_path, render_dir, sequence):
         camtask(["scanlines", str(render_dir), "--params", str(tmp_path / "bad.yaml")])
 
 
-def test_scanlines_on_video(tmp_path, sequence):
+def test_scanlines_on_video(tmp_path, sequence, capsys):
     cams, bg, frames, _ = sequence
     path = tmp_path / "clip.avi"
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 7.5, (160, 120))
@@ -108,6 +108,14 @@ def test_scanlines_on_video(tmp_path, sequence):
     assert camtask(["scanlines", "--video", str(folder), "--calibration", str(calib), "--background", "2",
                     "--json"]) == 0
     assert np.load(tmp_path / "imgs_scanlines.npz")["scanlines"].shape == (4, 1, 160)
+    assert "is grey" not in capsys.readouterr().err
+    grey = tmp_path / "grey"                       # the same images in grey: a warning, not silence
+    grey.mkdir()
+    for img in sorted(folder.iterdir()):
+        cv2.imwrite(str(grey / img.name), cv2.cvtColor(cv2.imread(str(img), cv2.IMREAD_GRAYSCALE), cv2.COLOR_GRAY2BGR))
+    assert camtask(["scanlines", "--video", str(grey), "--calibration", str(calib), "--background", "2",
+                    "--json"]) == 0
+    assert f"warning: --video: {grey} is grey (R = G = B)" in capsys.readouterr().err
     with pytest.raises(ValueError, match=r"background: expected shape \(1, 120, 160, 3\) to match the calibration"):
         big = tmp_path / "big"
         big.mkdir()

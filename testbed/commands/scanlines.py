@@ -119,7 +119,11 @@ def _run_video(args, params) -> int:
     bg = list(itertools.islice(frames, args.background))
     if len(bg) < args.background:
         raise ValueError(f"--background: expected at least {args.background} frames, the video has {len(bg)}")
-    pipe = Pipeline([cam], params, np.stack(bg)[:, None])
+    background = np.stack(bg)
+    if _grey(background):
+        print(f"warning: --video: {source} is grey (R = G = B): grey pixels all have the same colour "
+              "angle, so only pixels below the brightness floor can be foreground", file=sys.stderr)
+    pipe = Pipeline([cam], params, background[:, None])
     rest = (f[None] for f in itertools.islice(frames, args.frames))
     with tqdm(desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
         result = run_sequence(pipe, rest, progress=lambda: bar.update())
@@ -128,6 +132,11 @@ def _run_video(args, params) -> int:
                     camera_numbers=np.array([cam.number]))
     _report(result.metrics() | {"params": params.to_dict(), "out": str(out)}, [cam.number], args.json)
     return 0
+
+
+def _grey(images: np.ndarray) -> bool:
+    """True when every pixel of ``images`` (..., 3) uint8 has R = G = B."""
+    return bool(np.array_equal(images[..., 0], images[..., 1]) and np.array_equal(images[..., 1], images[..., 2]))
 
 
 def _report(m: dict, numbers, as_json: bool) -> None:
