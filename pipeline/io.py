@@ -50,7 +50,10 @@ def load_calibration(path: str | os.PathLike, number: int | None = None) -> Came
 
         def matrix(key, size):
             n = node(key)
-            m = n.real() if n.isReal() or n.isInt() else n.mat()
+            if n.isSeq():                                  # a list of numbers, e.g. [a, b, c]
+                m = [n.at(i).real() if n.at(i).isReal() or n.at(i).isInt() else np.nan for i in range(n.size())]
+            else:
+                m = n.real() if n.isReal() or n.isInt() else n.mat()
             m = None if m is None else np.asarray(m, float).ravel()
             if m is None or (size is not None and m.size != size) or not np.all(np.isfinite(m)):
                 raise ValueError(f"calibration: {path.name} {key}: expected {size or 'up to 5'} finite numbers")

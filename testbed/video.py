@@ -40,7 +40,10 @@ class VideoWriter:
         canvas = np.full((h, w, 3), 255, np.uint8)
         hh, ww = min(h, frame.shape[0]), min(w, frame.shape[1])
         canvas[:hh, :ww] = frame[:hh, :ww]
-        self._gen.send(canvas)
+        try:
+            self._gen.send(canvas)
+        except OSError as exc:        # imageio-ffmpeg's message holds ffmpeg's whole command line
+            raise OSError(f"--video: ffmpeg stopped writing {self.path} ({type(exc).__name__})") from None
 
     def close(self, ok: bool = True) -> None:
         if self._gen is not None:
@@ -52,7 +55,7 @@ class VideoWriter:
             return
         self.tmp.unlink(missing_ok=True)
         if ok and self._gen is not None:
-            raise RuntimeError(f"--video: ffmpeg wrote nothing to {self.path}")
+            raise OSError(f"--video: ffmpeg wrote nothing to {self.path}")
 
     def __enter__(self):
         return self
