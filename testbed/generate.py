@@ -58,9 +58,26 @@ def read_manifest(out: Path) -> dict | None:
     if not path.is_file():
         return None
     try:
-        return json.loads(path.read_text())
+        m = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise ValueError(f"cannot read {path} ({exc})") from None
+    problem = _manifest_shape_problem(m)
+    if problem:
+        raise ValueError(f"cannot read {path} (not a camtask manifest: {problem})")
+    return m
+
+
+def _manifest_shape_problem(m) -> str | None:
+    """What is missing from a parsed manifest for the commands that read it, else None."""
+    if not isinstance(m, dict):
+        return f"expected a JSON object, got {type(m).__name__ if m is not None else 'null'}"
+    if not isinstance(m.get("episodes"), list):
+        return "no list of episodes"
+    for i, e in enumerate(m["episodes"]):
+        if not (isinstance(e, dict) and isinstance(e.get("index"), int) and isinstance(e.get("name"), str)
+                and isinstance(e.get("frames"), int) and isinstance(e.get("files"), dict)):
+            return f"episodes[{i}] lacks an integer index and frames, a name or a files mapping"
+    return None
 
 
 def manifest(config: EpisodeConfig, episodes: int, entries: dict[int, dict]) -> dict:

@@ -330,6 +330,12 @@ def test_verify_names_what_differs_from_the_manifest(dataset, tmp_path, capsys):
             in text)
     assert not any(line.startswith("episode_0000") for line in text.splitlines())   # intact: not named
     assert ".episode_0002.abcd.tmp" in text and "1 of 2 episodes differ" in text
+    for text, problem in (("[]", "expected a JSON object, got list"), ("null", "expected a JSON object, got null"),
+                          ('{"episodes": [{"index": 0}]}', "episodes[0] lacks an integer index")):
+        (out / "manifest.json").write_text(text)                 # valid JSON, not a manifest: one line
+        assert main(["verify", str(out)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and f"(not a camtask manifest: {problem}" in err
     (out / "manifest.json").unlink()
     assert main(["verify", str(out)]) == 2
     assert "no manifest.json" in capsys.readouterr().err
@@ -625,6 +631,11 @@ def test_the_order_of_the_cameras_given_does_not_matter(dataset, tmp_path):
 
 
 def test_no_more_worker_processes_than_episodes(tmp_path):
+    # one episode runs in this process (--help: "a single episode = in this process")
     out = tmp_path / "data"
     assert main(["render", "lab", "--frames", "1", "--cameras", "2", "--workers", "6", "--out", str(out)]) == 0
-    assert json.loads((out / "run_info.json").read_text())["workers"] == 1
+    assert json.loads((out / "run_info.json").read_text())["workers"] == 0
+    out = tmp_path / "two"
+    assert main(["render", "lab", "--episodes", "2", "--frames", "1", "--cameras", "2", "--workers", "6",
+                 "--out", str(out)]) == 0
+    assert json.loads((out / "run_info.json").read_text())["workers"] == 2

@@ -1,6 +1,7 @@
 """camtask export wildtrack: boxes agree with the masks, calibration XML loads with cv2.FileStorage."""
 
 import json
+import os
 import xml.etree.ElementTree as ET
 
 import cv2
@@ -167,6 +168,9 @@ def test_boxes_match_the_exported_calibration_with_and_without_undistortion(tmp_
     ("data", "data/wild", [], "is inside DIR"),
     ("data/episode_0000", ".", ["--overwrite"], "holds DIR"),
     ("data/episode_0000", "data", ["--overwrite"], "holds DIR"),
+    # an episode given as DIR: its dataset is kept clear too (--resume would delete the export)
+    ("data/episode_0000", "data/episode_0002", [], f"is inside the dataset {{tmp}}{os.sep}data;"),
+    ("data/episode_0000", "data/wild", [], "is inside the dataset"),
 ])
 def test_export_refuses_an_out_that_is_in_or_holds_the_dataset(tmp_path, monkeypatch, capsys, given, out, extra,
                                                                message):
@@ -174,6 +178,8 @@ def test_export_refuses_an_out_that_is_in_or_holds_the_dataset(tmp_path, monkeyp
     episode = tmp_path / "data" / "episode_0000"
     episode.mkdir(parents=True)
     (episode / "meta.json").write_text("{}")
+    (tmp_path / "data" / "manifest.json").write_text("{}")
+    message = message.format(tmp=tmp_path.resolve())
     before = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*"))
     monkeypatch.chdir(tmp_path)
     assert main(["export", "wildtrack", given, out, *extra]) == 2

@@ -156,3 +156,15 @@ def test_interrupted_run_leaves_no_video(tmp_path, monkeypatch):
     video = tmp_path / "run.mp4"
     assert main(["run", "lab", "--frames", "3", "--video", str(video)]) == 130
     assert list(tmp_path.iterdir()) == []
+
+
+def test_demo_writes_its_video_summary_and_top_view_and_same_seed_same_summary(tmp_path, capsys):
+    # what `make demo` runs, on fewer frames
+    for out in (tmp_path / "a", tmp_path / "b"):
+        assert main(["demo", "--out", str(out), "--frames", "3"]) == 0
+        assert (out / "run.mp4").stat().st_size > 1000 and (out / "topview.png").stat().st_size > 1000
+        assert sorted(p.name for p in out.iterdir()) == ["run.mp4", "summary.json", "topview.png"]
+    doc = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert len(doc["frames"]) == 3 and doc["summary"]["seed"] == 1                   # the default seed
+    assert (tmp_path / "a" / "summary.json").read_bytes() == (tmp_path / "b" / "summary.json").read_bytes()
+    assert "mean residual" in capsys.readouterr().out

@@ -31,6 +31,7 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from testbed.episodes import episode_name
+    from testbed.generate import MANIFEST
     from testbed.wildtrack import export_wildtrack
 
     root = Path(args.dir)
@@ -39,7 +40,8 @@ def run(args) -> int:
     episode = root if (root / "meta.json").is_file() else root / episode_name(args.episode)
     if not (episode / "meta.json").is_file():
         raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
-    check_apart(args.out, root, episode)
+    dataset = episode.resolve().parent         # DIR may be an episode of a dataset: keep out of that too
+    check_apart(args.out, root, episode, dataset=dataset if (dataset / MANIFEST).is_file() else None)
     check_export_out(args.out, args.overwrite)
     check_intact(episode)
     meta = json.loads((episode / "meta.json").read_text())
@@ -51,21 +53,23 @@ def run(args) -> int:
     return 0
 
 
-def check_apart(out: str, *sources: Path) -> None:
-    """Refuse an OUT that is a source folder, lies inside one or holds one.
+def check_apart(out: str, *sources: Path, dataset: Path | None = None) -> None:
+    """Refuse an OUT that is a source folder (or the ``dataset`` an episode DIR belongs
+    to), lies inside one or holds one.
 
     Inside the dataset, the export's files would make an episode fail its checksums (and
     ``--resume`` delete it); holding it, ``--overwrite`` would delete the dataset.
     """
     o = Path(out).resolve()
-    for src in sources:
+    named = [(f"DIR {src}", src) for src in sources] + ([(f"the dataset {dataset}", dataset)] if dataset else [])
+    for name, src in named:
         s = src.resolve()
         if o == s:
-            raise ValueError(f"OUT: {out} is DIR {src}; choose a folder outside the dataset")
+            raise ValueError(f"OUT: {out} is {name}; choose a folder outside the dataset")
         if s in o.parents:
-            raise ValueError(f"OUT: {out} is inside DIR {src}; choose a folder outside the dataset")
+            raise ValueError(f"OUT: {out} is inside {name}; choose a folder outside the dataset")
         if o in s.parents:
-            raise ValueError(f"OUT: {out} holds DIR {src}; choose a folder outside the dataset")
+            raise ValueError(f"OUT: {out} holds {name}; choose a folder outside the dataset")
 
 
 def check_export_out(out: str, overwrite: bool) -> None:

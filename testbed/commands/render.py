@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
         workers = min(default_workers(), args.episodes)
         workers = 0 if workers == 1 else workers
     elif workers:                                     # a worker more than episodes would only start up
-        workers = min(workers, args.episodes)
+        workers = 0 if args.episodes == 1 else min(workers, args.episodes)   # one episode: in this process
     with exclusive(out):                              # until the clean-up after the workers is done
         return _run(args, config, scene, out, workers)
 
