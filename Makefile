@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
-# Rendering processes get fewer llvmpipe threads when several share the machine.
+# Off-screen OpenGL through EGL, no display needed (render/gl.py falls back to OSMesa).
 export PYOPENGL_PLATFORM ?= egl
 
 .PHONY: install demo test lint clean gl

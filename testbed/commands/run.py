@@ -25,16 +25,16 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
     from tasking import TASKERS
 
     p.add_argument("scene", metavar="SCENE.yaml", help="scene file or built-in name (lab)")
-    p.add_argument("--tasker", default="incremental", help=f"one of {', '.join(TASKERS)}")
+    p.add_argument("--tasker", default="incremental", help=f"one of {', '.join(TASKERS)} (default incremental)")
     p.add_argument("--k", type=int, default=6, help="cameras tasked per frame (default 6)")
     p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
-    p.add_argument("--update-every", type=int, default=1, metavar="U", help="re-task every U frames")
+    p.add_argument("--update-every", type=int, default=1, metavar="U", help="re-task every U frames (default 1)")
     p.add_argument("--feedback", default="hull", choices=("hull", "tracks"),
                    help="object estimates for tasking: previous hull centres (paper) or tracks")
     p.add_argument("--frames", type=int, default=30, help="frames to run (default 30, 4 s at 7.5 Hz)")
     p.add_argument("--people", type=int, default=None, help="people in the room (default: the scene's)")
     p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default: built-in)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the walk and the sensor noise")
+    p.add_argument("--seed", type=int, default=0, help="seed of the walk and the sensor noise (default 0)")
 
 
 def prepare(args):
@@ -60,7 +60,14 @@ def prepare(args):
     if scene.people.count == 0:
         option = "--people" if args.people is not None else f"people.count of {args.scene}"
         raise ValueError(f"{option}: expected at least 1 person to track, got 0")
-    config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback).check(len(scene.cameras))
+    try:
+        config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback).check(len(scene.cameras))
+    except ValueError as exc:                       # named as the options are: "k: ..." -> "--k: ..."
+        field, sep, rest = str(exc).partition(":")
+        if sep and field in ("tasker", "k", "m", "update_every", "feedback"):
+            raise ValueError(f"--{field.replace('_', '-')}:{rest}") from None
+        raise
+
     params = load_params(args.params)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
     return scene, config, params, walk(scene, args.frames, motion_rng), sensor_rng

@@ -4,11 +4,12 @@
     camtask scanlines --video FILE --calibration cam.yaml --background N [--out FILE.npz]
 
 A render directory gives ``DIR/scanlines.npz`` (``scanlines``, ``gt_scanlines``
-(n_frames, n_cams, W) bool, ``bearings`` (n_cams, W) float radians) and the CDnet metrics
+(n_frames, n_cams, W) bool, ``bearings`` (n_cams, W) float radians, ``camera_numbers``
+(n_cams,) int) and the CDnet metrics
 of the scanline columns and of the foreground pixels. An episode of a dataset written by
 ``camtask render`` needs ``--out``: the dataset's manifest checksums its files. A video
-(or a folder of images, sorted) gives ``scanlines`` (n_frames, 1, W) and ``bearings``
-(1, W); its first N frames are the background. Files are written atomically, only when
+(or a folder of images, sorted) gives ``scanlines`` (n_frames, 1, W), ``bearings``
+(1, W) and ``camera_numbers`` (1,); its first N frames are the background. Files are written atomically, only when
 the run completes.
 """
 
