@@ -25,18 +25,23 @@ def check_choice(name: str, value: Any, valid: Iterable[str]) -> str:
     return value
 
 
+def _number(name: str, value: Any) -> float:
+    """``value`` as a float; booleans and strings are not numbers here."""
+    if isinstance(value, (bool, str, bytes)):
+        raise ValueError(f"{name}: expected a number, got {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a number, got {value!r}") from None
+
+
 def check_finite(name: str, value: Any) -> float:
-    """Return ``value`` as a finite float; booleans and strings are not numbers here.
+    """Return ``value`` as a finite float.
 
     >>> check_finite("yaw_deg", -45)
     -45.0
     """
-    if isinstance(value, (bool, str, bytes)):
-        raise ValueError(f"{name}: expected a number, got {value!r}")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected a number, got {value!r}") from None
+    x = _number(name, value)
     if not np.isfinite(x):
         raise ValueError(f"{name}: expected a finite number, got {value!r}")
     return x
@@ -44,12 +49,7 @@ def check_finite(name: str, value: Any) -> float:
 
 def check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
     """Return ``value`` as a finite float > 0 (or >= 0 with ``allow_zero``)."""
-    if isinstance(value, (bool, str, bytes)):
-        raise ValueError(f"{name}: expected a number, got {value!r}")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected a number, got {value!r}") from None
+    x = _number(name, value)
     if not np.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
         bound = ">= 0" if allow_zero else "> 0"
         raise ValueError(f"{name}: expected a finite number {bound}, got {value!r}")
