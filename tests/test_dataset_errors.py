@@ -88,7 +88,7 @@ def test_a_folder_that_is_not_a_dataset_is_neither_resumed_nor_overwritten(tmp_p
 def test_unreachable_scheduler(tmp_path, capsys):
     code, line = run(capsys, "lab", "--out", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:9")
     assert code == 2 and "cannot reach a Dask scheduler" in line
-    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+    assert not (tmp_path / "out").exists()                # the folder this run made is gone again
 
 
 def test_full_disk_is_refused_before_any_work(tmp_path, capsys, monkeypatch):

@@ -98,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if not (args.overwrite or args.resume):          # those free or keep episodes: checked below
         check_space(out, estimate_bytes(config, scene, 1), "one episode")
+    created = not out.exists()
     check_out(out, args.resume, args.overwrite)       # refuse before starting a cluster
     workers = args.workers
     if workers is None and args.scheduler is None:
@@ -106,8 +107,12 @@ def run(args: argparse.Namespace) -> int:
         workers = 0 if workers == 1 else workers
     elif workers:                                     # a worker more than episodes would only start up
         workers = 0 if args.episodes == 1 else min(workers, args.episodes)   # one episode: in this process
-    with exclusive(out):                              # until the clean-up after the workers is done
-        return _run(args, config, scene, out, workers)
+    try:
+        with exclusive(out):                          # until the clean-up after the workers is done
+            return _run(args, config, scene, out, workers)
+    finally:
+        if created and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()                               # e.g. an unreachable scheduler: leave no trace
 
 
 def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None) -> int:
