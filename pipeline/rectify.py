@@ -12,8 +12,8 @@ its top edge to its bottom edge*: the raw image's side edges are curved and slan
 the level view (lens distortion and pitch), and a column that the raw image covers only
 at some heights must not be sent as empty where it saw nothing; it is left out of the
 field of view instead, where tasking treats the room as unconstrained. For the lab
-cameras this band is 49.1 degrees wide. Pixels are square, and the output height covers the real image
-vertically.
+cameras this band is 49.1 degrees wide. Pixels are square, and the output height covers
+the real image vertically.
 """
 
 from __future__ import annotations

@@ -12,7 +12,8 @@ object centres. The hull of a set S is ``room - union(wedges[S])``, so
 Greedy and lazy greedy compute gains with the same GEOS operation on the same hull, so
 they see identical floating-point numbers and make the identical choice: gains within
 ``LAZY_TOL`` of the room's area of the largest count as tied, and the lowest camera
-index goes (as in removals and the fan-table path), so overlay rounding cannot decide. Areas are of the raw hull, before small-polygon removal.
+index goes (as in removals and the fan-table path), so overlay rounding cannot decide.
+Areas are of the raw hull, before small-polygon removal.
 
 >>> from shapely.geometry import Point
 >>> room = Point(0, 0).buffer(1.0, quad_segs=32)

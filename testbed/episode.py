@@ -28,6 +28,17 @@ def with_people(scene: Scene, count: int | None, *, option: str = "--people") ->
     return dataclasses.replace(scene, people=people)
 
 
+def check_renderable(scene: Scene, option: str) -> None:
+    """Raise a one-line ValueError naming ``option`` unless every camera of ``scene`` is
+    calibrated and can be rectified to a level camera (checked before any rendering)."""
+    from pipeline.rectify import check_rectifiable
+
+    if not scene.is_calibrated:
+        raise ValueError(f"{option}: {scene.name!r} has floor-plane cameras only; rendering needs calibrated "
+                         "cameras (the circular simulation is `camtask study cameras`, `static`, `moving`, `tracking`)")
+    check_rectifiable(scene.cameras)
+
+
 def walk(scene: Scene, frames: int, rng: np.random.Generator) -> np.ndarray:
     """Random-waypoint positions of the scene's people, (frames, people, 2) float, metres."""
     people = scene.people

@@ -52,16 +52,19 @@ class LoopConfig:
     update_every: int = 1
     feedback: str = "hull"
 
-    def check(self, n_cameras: int) -> LoopConfig:
-        check_choice("tasker", self.tasker, TASKERS)
-        check_choice("feedback", self.feedback, ("hull", "tracks"))
-        k = check_int("k", self.k, minimum=1)
+    def check(self, n_cameras: int, *, as_options: bool = False) -> LoopConfig:
+        """Raise a one-line ValueError naming the bad field (as its command-line option,
+        ``--update-every``, with ``as_options``); return ``self``."""
+        name = (lambda f: "--" + f.replace("_", "-")) if as_options else (lambda f: f)
+        check_choice(name("tasker"), self.tasker, TASKERS)
+        check_choice(name("feedback"), self.feedback, ("hull", "tracks"))
+        k = check_int(name("k"), self.k, minimum=1)
         if k > n_cameras:
-            raise ValueError(f"k: expected at most {n_cameras} cameras (the scene has {n_cameras}), got {k}")
-        m = check_int("m", self.m, minimum=1)
+            raise ValueError(f"{name('k')}: expected at most {n_cameras} cameras (the scene has {n_cameras}), got {k}")
+        m = check_int(name("m"), self.m, minimum=1)
         if m > k:
-            raise ValueError(f"m: expected at most k = {k}, got {m}")
-        check_int("update_every", self.update_every, minimum=1)
+            raise ValueError(f"{name('m')}: expected at most k = {k}, got {m}")
+        check_int(name("update_every"), self.update_every, minimum=1)
         return self
 
 

@@ -45,5 +45,4 @@ def save_figure(fig, path: str | os.PathLike, dpi: float = 80) -> None:
         fig.savefig(png, format="png", dpi=dpi)
     finally:
         plt.close(fig)
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(path, png.getvalue())
+    write_atomic(path, png.getvalue())          # makes the folder when missing

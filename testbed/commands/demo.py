@@ -24,6 +24,7 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     import cv2
 
+    from pipeline.files import write_atomic
     from testbed.commands.run import execute, format_summary, prepare
     from testbed.topview import TopView
 
@@ -38,20 +39,14 @@ def run(args: argparse.Namespace) -> int:
     results, summary, bearings = execute(scene, config, params, truth, rng, out / "run.mp4")
     summary["seed"] = args.seed             # no wall-clock time: same seed, same bytes
     seconds = round(time.perf_counter() - t0, 1)
-    _write_json(out / "summary.json", {"summary": summary, "frames": [r.to_json() for r in results]})
+    doc = {"summary": summary, "frames": [r.to_json() for r in results]}
+    write_atomic(out / "summary.json", json.dumps(doc, indent=1, allow_nan=False).encode())
     view = TopView(scene, width=720)
     for r in results:                      # draw every frame so the tracks have their tails
         top = view.draw(r, bearings)
-    tmp = out / ".topview.partial.png"
-    cv2.imwrite(str(tmp), top[..., ::-1])
-    os.replace(tmp, out / "topview.png")
+    write_atomic(out / "topview.png", cv2.imencode(".png", top[..., ::-1])[1].tobytes())
     print(format_summary(summary))
     print(f"\nwrote {out / 'run.mp4'}, {out / 'summary.json'}, {out / 'topview.png'} "
           f"({seconds} s)", file=sys.stderr)
     return 0
 
-
-def _write_json(path: Path, doc: dict) -> None:
-    tmp = path.with_name(f".{path.name}.partial")
-    tmp.write_text(json.dumps(doc, indent=1, allow_nan=False))
-    os.replace(tmp, path)

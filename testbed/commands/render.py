@@ -63,9 +63,9 @@ def check_positive(name: str, value: int) -> int:
 def build_config(args: argparse.Namespace):
     """Validate the arguments (no rendering); return the :class:`EpisodeConfig` and its scene."""
     from pipeline.params import load_params
-    from pipeline.rectify import check_rectifiable
     from render.renderer import check_camera_numbers
     from testbed.cli import check_seed
+    from testbed.episode import check_renderable
     from testbed.episodes import (
         EpisodeConfig,
         load_episode_scene,
@@ -82,11 +82,9 @@ def build_config(args: argparse.Namespace):
                                            frames=args.frames, seed=args.seed, fmt=args.format,
                                            params=load_params(args.params).to_dict()))
     scene = load_episode_scene(config)
-    if not scene.is_calibrated:
-        raise ValueError(f"scene: {scene.name!r} has floor-plane cameras only; rendering needs calibrated cameras")
+    check_renderable(scene, "scene")
     check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])
     silhouette_dtype(scene.people.count, "--people" if args.people is not None else "people.count")
-    check_rectifiable(scene.cameras)
     return config, scene
 
 

@@ -40,10 +40,9 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
 def prepare(args):
     """Validate the arguments and draw the walk: (scene, config, params, truth, sensor rng)."""
     from pipeline import load_params
-    from pipeline.rectify import check_rectifiable
     from scene import load_scene
     from testbed.cli import check_seed
-    from testbed.episode import walk, with_people
+    from testbed.episode import check_renderable, walk, with_people
     from testbed.loop import LoopConfig
     from testbed.output import check_output_file
 
@@ -53,21 +52,12 @@ def prepare(args):
     if args.video:
         check_output_file("--video", args.video, ".mp4")
     scene = with_people(load_scene(args.scene), args.people)
-    if not scene.is_calibrated:
-        raise ValueError(f"SCENE: {scene.name!r} has floor-plane cameras only; `camtask run` renders "
-                         "calibrated cameras (use `camtask study` for the circular simulation)")
-    check_rectifiable(scene.cameras)
+    check_renderable(scene, "SCENE")
     if scene.people.count == 0:
         option = "--people" if args.people is not None else f"people.count of {args.scene}"
         raise ValueError(f"{option}: expected at least 1 person to track, got 0")
-    try:
-        config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback).check(len(scene.cameras))
-    except ValueError as exc:                       # named as the options are: "k: ..." -> "--k: ..."
-        field, sep, rest = str(exc).partition(":")
-        if sep and field in ("tasker", "k", "m", "update_every", "feedback"):
-            raise ValueError(f"--{field.replace('_', '-')}:{rest}") from None
-        raise
-
+    config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback).check(
+        len(scene.cameras), as_options=True)
     params = load_params(args.params)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
     return scene, config, params, walk(scene, args.frames, motion_rng), sensor_rng

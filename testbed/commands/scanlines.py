@@ -5,12 +5,12 @@
 
 A render directory gives ``DIR/scanlines.npz`` (``scanlines``, ``gt_scanlines``
 (n_frames, n_cams, W) bool, ``bearings`` (n_cams, W) float radians, ``camera_numbers``
-(n_cams,) int) and the CDnet metrics
-of the scanline columns and of the foreground pixels. An episode of a dataset written by
-``camtask render`` needs ``--out``: the dataset's manifest checksums its files. A video
-(or a folder of images, sorted) gives ``scanlines`` (n_frames, 1, W), ``bearings``
-(1, W) and ``camera_numbers`` (1,); its first N frames are the background. Files are written atomically, only when
-the run completes.
+(n_cams,) int) and the CDnet metrics of the scanline columns and of the foreground
+pixels. An episode of a dataset written by ``camtask render`` needs ``--out``: the
+dataset's manifest checksums its files. A video (or a folder of images, sorted) gives
+``scanlines`` (n_frames, 1, W), ``bearings`` (1, W) and ``camera_numbers`` (1,); its
+first N frames are the background. Files are written atomically, only when the run
+completes.
 """
 
 from __future__ import annotations

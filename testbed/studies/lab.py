@@ -31,14 +31,11 @@ def add_arguments(p) -> None:
 
 
 def parse(args) -> dict:
-    from pipeline.rectify import check_rectifiable
     from scene import load_scene
-    from testbed.episode import with_people
+    from testbed.episode import check_renderable, with_people
 
     scene = with_people(load_scene(args.scene), args.people)
-    if not scene.is_calibrated:
-        raise ValueError(f"--scene: {scene.name!r} has floor-plane cameras only; the lab study renders")
-    check_rectifiable(scene.cameras)
+    check_renderable(scene, "--scene")
     if args.people < 1:
         raise ValueError(f"--people: expected an integer >= 1, got {args.people}")
     ks = core.parse_ints("k", args.k, minimum=1)
