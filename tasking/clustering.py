@@ -17,7 +17,6 @@ Axial angles wrap at pi, so k-means runs on the doubled-angle embedding
 from __future__ import annotations
 
 import numpy as np
-from sklearn.cluster import KMeans
 
 __all__ = ["axial_distance", "cluster_axes", "clustering_select", "pair_axes"]
 
@@ -60,6 +59,9 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     centres : (c,) float, radians in ``[0, pi)``, ordered by cluster size, largest first
     sizes : (c,) int
     """
+    # imported here: scikit-learn's import is ~1 s of every command's start
+    from sklearn.cluster import KMeans
+
     feats = np.c_[np.cos(2 * axes), np.sin(2 * axes)]
     distinct = np.unique(np.round(feats, 12), axis=0).shape[0]
     c = min(k, distinct)

@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from scene.checks import check_array, check_int, check_positive
 
@@ -106,6 +105,9 @@ class Tracker:
         self.P = self._F @ self.P @ self._F.T + self._Q
 
     def _assign(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # imported here: scipy.optimize takes ~0.5 s to import
+        from scipy.optimize import linear_sum_assignment
+
         if len(self.x) == 0 or len(z) == 0:
             return np.zeros(0, int), np.zeros(0, int)
         cost = np.linalg.norm(self.x[:, None, :2] - z[None], axis=-1)

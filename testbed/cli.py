@@ -69,7 +69,11 @@ def _terminate(signum, frame) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    try:
+        parser = build_parser()     # imports every command module: numpy, OpenCV, shapely
+    except KeyboardInterrupt:       # Ctrl-C in the first half second: no traceback either
+        print("camtask: interrupted", file=sys.stderr)
+        return 130
     args = parser.parse_args(argv)
     in_main = threading.current_thread() is threading.main_thread()     # where signal handlers run
     previous = signal.signal(signal.SIGTERM, _terminate) if in_main else None

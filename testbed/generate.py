@@ -283,7 +283,9 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
         if old is not None:
             if old.get("config") != config.to_dict():
                 raise ValueError(f"--resume: {out / MANIFEST} was written with other arguments "
-                                 f"({_diff(old, config)}); use --overwrite to start again")
+                                 f"({_diff(old, config)}); give the arguments of that run to finish it "
+                                 "(the same scene string too: it is recorded in each meta.json), or "
+                                 "--overwrite to start again")
             planned = int(old.get("episodes_planned", 0))
             if episodes < planned:                  # more is fine: episode i depends on the seed and i only
                 raise ValueError(f"--resume: --episodes {episodes}, but the run planned {planned}: it can "

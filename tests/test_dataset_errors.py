@@ -120,8 +120,12 @@ def test_manifest_before_the_first_episode_and_unlisted_folders_removed(tmp_path
     assert m["episodes"] == [] and m["episodes_planned"] == 3 and m["config"] == config.to_dict()
     # a run stopped before its first episode is still recognised
     other = EpisodeConfig("lab", None, (2, 7), 5, 1, "png", load_params().to_dict())
-    with pytest.raises(ValueError, match="frames: 4 then, 5 now"):
+    with pytest.raises(ValueError, match="frames: 4 then, 5 now.*give the arguments of that run"):
         prepare_output(out, other, 3, True, False)
+    # the scene string is an argument too: meta.json records it
+    moved = EpisodeConfig("./lab.yaml", None, (2, 7), 4, 1, "png", load_params().to_dict())
+    with pytest.raises(ValueError, match="scene: 'lab' then, './lab.yaml' now"):
+        prepare_output(out, moved, 3, True, False)
     for name in ("episode_0001", ".episode_0002.x1.tmp", "notes"):
         (out / name).mkdir()
     remove_unlisted(out)

@@ -1,0 +1,39 @@
+"""camtask's dispatcher: what every command pays at start-up, and Ctrl-C during it."""
+
+import subprocess
+import sys
+
+from testbed import cli
+
+#: Modules that take ~0.5-1 s each to import and only some commands need.
+HEAVY = ("sklearn", "scipy.optimize", "scipy.stats")
+
+
+def test_building_the_parser_leaves_the_heavy_imports_to_the_commands_that_use_them():
+    code = ("import sys, testbed.cli as c; c.build_parser(); "
+            f"print(','.join(m for m in {HEAVY!r} if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == ""
+
+
+def test_the_clustering_tasker_and_the_tracker_still_import_what_they_use():
+    import numpy as np
+
+    from tasking.clustering import cluster_axes
+    from tasking.tracker import Tracker, TrackerParams
+
+    centres, sizes = cluster_axes(np.array([0.1, 0.12, 1.5, 1.52]), 2, seed=0)
+    assert np.round(np.sort(centres), 2).tolist() == [0.11, 1.51] and sizes.tolist() == [2, 2]
+    tracker = Tracker(TrackerParams(confirm_hits=1))
+    tracker.step(np.array([[1.0, 1.0]]))                # births a track
+    ids, xy = tracker.step(np.array([[1.0, 1.0]]))      # matched: linear_sum_assignment
+    assert ids.tolist() == [0] and np.allclose(xy, [[1.0, 1.0]])
+
+
+def test_ctrl_c_while_the_commands_import_is_one_line(monkeypatch, capsys):
+    def interrupted():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "build_parser", interrupted)
+    assert cli.main(["--help"]) == 130
+    assert capsys.readouterr().err == "camtask: interrupted\n"
