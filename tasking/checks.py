@@ -30,6 +30,7 @@ __all__ = [
     "check_fov",
     "check_indices",
     "check_int",
+    "check_near",
     "check_points",
     "check_radii",
     "check_room",
@@ -93,6 +94,19 @@ def check_radii(name: str, radii, m: int) -> np.ndarray:
         raise ValueError(f"{name} must be a scalar or have shape ({m},); got shape {arr.shape}")
     if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         raise ValueError(f"{name} must be finite and > 0")
+    return arr
+
+
+def check_near(near, n: int) -> np.ndarray:
+    """Broadcast blind radii ``near`` (scalar or ``(n,)``, metres) to ``(n,)``, all >= 0 (``inf``
+    allowed: a camera that proves nothing empty)."""
+    arr = np.asarray(near, dtype=float)
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ValueError(f"near must be a scalar or have shape ({n},); got shape {arr.shape}")
+    if np.any(np.isnan(arr)) or np.any(arr < 0):
+        raise ValueError("near must be >= 0 metres (inf allowed), not NaN")
     return arr
 
 

@@ -192,7 +192,7 @@ def wedge_radius(room: BaseGeometry, camera_xy: np.ndarray) -> float:
     return 2.0 * float(np.hypot(x1 - x0, y1 - y0)) + 1.0
 
 
-def wedge_polygons(apex, theta0, theta1, radius: float) -> np.ndarray:
+def wedge_polygons(apex, theta0, theta1, radius: float, inner=None) -> np.ndarray:
     """Forward wedges from ``apex`` between world-frame angles ``theta0 < theta1``.
 
     Parameters
@@ -200,20 +200,39 @@ def wedge_polygons(apex, theta0, theta1, radius: float) -> np.ndarray:
     apex : (q, 2) float, metres, world frame
     theta0, theta1 : (q,) float, radians, world frame, ``0 < theta1 - theta0 < 2*pi``
     radius : float, metres
+    inner : optional (q,) float, metres, ``0 <= inner < radius cos(s/2)^2`` for the arc
+        step ``s = (theta1 - theta0) / (ARC_POINTS - 1)``: cut every
+        wedge to the part beyond ``inner`` from the apex (a camera's near field,
+        :mod:`pipeline.nearfield`). The inner arc's chords pass outside the circle of
+        radius ``inner``, so the whole disc stays outside the wedge.
 
     Returns
     -------
-    (q,) object array of shapely Polygons with ``ARC_POINTS + 2`` vertices each.
+    (q,) object array of shapely Polygons with ``ARC_POINTS + 2`` vertices each
+    (``2 * ARC_POINTS + 1`` with ``inner``).
     """
     t = np.linspace(0.0, 1.0, ARC_POINTS)
     ang = theta0[:, None] + (theta1 - theta0)[:, None] * t[None, :]
-    coords = np.empty((apex.shape[0], ARC_POINTS + 2, 2))
-    coords[:, 0] = apex
-    coords[:, -1] = apex
-    coords[:, 1:-1, 0] = apex[:, :1] + radius * np.cos(ang)
-    coords[:, 1:-1, 1] = apex[:, 1:] + radius * np.sin(ang)
-    if apex.shape[0] == 0:
+    q = apex.shape[0]
+    if q == 0:
         return np.empty(0, dtype=object)
+    if inner is None:
+        coords = np.empty((q, ARC_POINTS + 2, 2))
+        coords[:, 0] = apex
+        coords[:, -1] = apex
+        outer = coords[:, 1:-1]
+    else:
+        coords = np.empty((q, 2 * ARC_POINTS + 1, 2))
+        half_step = 0.5 * (theta1 - theta0) / (ARC_POINTS - 1)
+        r = np.asarray(inner, float) / np.cos(half_step)           # chords tangent to the circle
+        back = ang[:, ::-1]
+        coords[:, ARC_POINTS:-1, 0] = apex[:, :1] + r[:, None] * np.cos(back)
+        coords[:, ARC_POINTS:-1, 1] = apex[:, 1:] + r[:, None] * np.sin(back)
+        outer = coords[:, :ARC_POINTS]
+    outer[..., 0] = apex[:, :1] + radius * np.cos(ang)
+    outer[..., 1] = apex[:, 1:] + radius * np.sin(ang)
+    if inner is not None:
+        coords[:, -1] = coords[:, 0]                                # closed on the outer arc's start
     return np.atleast_1d(shapely.polygons(coords))
 
 

@@ -29,6 +29,7 @@ from .checks import (
     check_discs_disjoint,
     check_discs_in_room,
     check_fov,
+    check_near,
     check_points,
     check_radii,
     check_room,
@@ -107,7 +108,7 @@ def free_wedges_from_discs(
     return (wedges, table) if return_cones else wedges
 
 
-def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room) -> np.ndarray:
+def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near=None) -> np.ndarray:
     """Per-camera union of free wedges (not clipped to the room), from scanlines.
 
     Parameters
@@ -117,6 +118,10 @@ def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room) -> np.ndarr
         plane; strictly monotone along each row (either direction), W >= 2
     scanlines : (n, W) bool, True = occupied column
     room : shapely Polygon
+    near : optional float or (n,) float, metres, >= 0 (``inf`` allowed): each camera's
+        blind radius (:meth:`pipeline.Pipeline.blind_radius`); its free wedges start
+        that far from it, since an object closer may be below its image. None: from
+        the camera centre, as for the paper's cameras.
 
     Returns
     -------
@@ -142,20 +147,27 @@ def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room) -> np.ndarr
     if not np.all(monotone):
         bad = int(np.flatnonzero(~monotone)[0])
         raise ValueError(f"bearings must be strictly monotone along each row (row {bad})")
+    if near is not None:
+        near = check_near(near, n)
     yaw, fov, lo, hi = cones.scanline_intervals(bearings, scanlines)
     if np.any(fov >= 2 * np.pi):
         raise ValueError("bearings: the columns of a camera must span less than 2*pi")
-    return _wedges(camera_xy, yaw, 0.5 * fov, lo, hi, room)[0]
+    return _wedges(camera_xy, yaw, 0.5 * fov, lo, hi, room, near=near)[0]
 
 
-def _wedges(camera_xy, yaw, half, lo, hi, room, polygons: bool = True):
+def _wedges(camera_xy, yaw, half, lo, hi, room, polygons: bool = True, near=None):
     camera, a0, a1 = cones.free_intervals(lo, hi, half)
     theta0, theta1 = yaw[camera] + a0, yaw[camera] + a1
     table = (camera, camera_xy[camera], theta0, theta1)
     if not polygons:
         return None, table
     radius = cones.wedge_radius(room, camera_xy)
-    polys = cones.wedge_polygons(camera_xy[camera], theta0, theta1, radius)
+    inner = None
+    if near is not None and np.any(near > 0):
+        inner = near[camera]
+        keep = inner < radius * np.cos(0.5 * (theta1 - theta0) / (cones.ARC_POINTS - 1)) ** 2   # inside the arc's chords
+        camera, theta0, theta1, inner = camera[keep], theta0[keep], theta1[keep], inner[keep]
+    polys = cones.wedge_polygons(camera_xy[camera], theta0, theta1, radius, inner)
     return cones.group_by_camera(polys, camera, camera_xy.shape[0]), table
 
 
@@ -217,9 +229,10 @@ def empty_regions_from_discs(camera_xy, camera_yaw, fov, centers, radii, room) -
     return list(shapely.intersection(w, room))
 
 
-def empty_regions_from_scanlines(camera_xy, bearings, scanlines, room) -> list:
-    """Per-camera region proven empty, from scanlines; a list of n geometries."""
-    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room)
+def empty_regions_from_scanlines(camera_xy, bearings, scanlines, room, near=None) -> list:
+    """Per-camera region proven empty, from scanlines (``near`` as in
+    :func:`free_wedges_from_scanlines`); a list of n geometries."""
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near)
     return list(shapely.intersection(w, room))
 
 
@@ -233,9 +246,10 @@ def camera_regions_from_discs(camera_xy, camera_yaw, fov, centers, radii, room) 
     return [drop_slivers(g, room) for g in shapely.difference(room, w)]
 
 
-def camera_regions_from_scanlines(camera_xy, bearings, scanlines, room) -> list:
-    """Per-camera "not proven empty" regions, from scanlines; a list of n geometries."""
-    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room)
+def camera_regions_from_scanlines(camera_xy, bearings, scanlines, room, near=None) -> list:
+    """Per-camera "not proven empty" regions, from scanlines (``near`` as in
+    :func:`free_wedges_from_scanlines`); a list of n geometries."""
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near)
     return [drop_slivers(g, room) for g in shapely.difference(room, w)]
 
 
@@ -259,7 +273,7 @@ def visual_hull_of_discs(camera_xy, camera_yaw, fov, centers, radii, room) -> Ba
     return hull_from_wedges(w, room)
 
 
-def visual_hull_of_scanlines(camera_xy, bearings, scanlines, room) -> BaseGeometry:
+def visual_hull_of_scanlines(camera_xy, bearings, scanlines, room, near=None) -> BaseGeometry:
     """Visual hull from binary scanlines.
 
     Parameters
@@ -270,12 +284,14 @@ def visual_hull_of_scanlines(camera_xy, bearings, scanlines, room) -> BaseGeomet
         either side, so the field of view is the span of the column edges
     scanlines : (n, W) bool, True = occupied column
     room : shapely Polygon
+    near : optional float or (n,) float, metres: each camera's blind radius, within
+        which it proves nothing empty (:func:`free_wedges_from_scanlines`)
 
     Returns
     -------
     shapely geometry, the hull before small-polygon removal.
     """
-    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room)
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near)
     return hull_from_wedges(w, room)
 
 

@@ -323,6 +323,8 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     by_number = {c.number: k for k, c in enumerate(scene.cameras)}
     camera_xy = xy_all[[by_number[n] for n in numbers]]
     room = scene.room.polygon
+    near = pipe.blind_radius(people.height)                  # metres: the pipeline's scanlines
+    gt_near = pipe.blind_radius(people.height, truth=True)   # the true ones
 
     name = episode_name(index)
     tmp = temp_folder(out, f".{name}.")
@@ -360,7 +362,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
             scans.append(scan)
             gts.append(gt)
             t4 = time.perf_counter()
-            hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room)))
+            hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room, gt_near)))
             for pid, (x, y) in enumerate(np.asarray(track[f], float)):
                 rows.append((f, pid, repr(float(x)), repr(float(y)), people.radius, people.height))
             for key, dt in (("write", t3 - t2), ("pipeline", t4 - t3), ("hull", time.perf_counter() - t4)):
@@ -402,10 +404,11 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
             w.writerow(["frame", "person_id", "x", "y", "radius", "height"])
             w.writerows(rows)
         save_npz_exact(tmp / "scanlines.npz", scanlines=np.stack(scans), gt_scanlines=np.stack(gts),
-                       bearings=pipe.bearings, camera_numbers=np.array(numbers))
+                       bearings=pipe.bearings, camera_numbers=np.array(numbers),
+                       blind_radius=near, gt_blind_radius=gt_near)
         params.to_yaml(tmp / "pipeline.yaml")
         (tmp / "gt_hull.json").write_text(json.dumps(
-            {"units": "metres, world frame", "source": "ground-truth scanlines of all cameras of the episode",
+            {"units": "metres, world frame", "source": "ground-truth scanlines of all cameras of the episode, beyond their blind radii",
              "cameras": numbers, "frames": hulls}, separators=(",", ":")) + "\n")
         source = config.scene
         meta = {

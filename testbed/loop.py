@@ -131,6 +131,8 @@ class LiveSource:
         self.pipes = {cam.number: Pipeline([cam], params, background=background[i:i + 1])
                       for i, cam in enumerate(scene.cameras)}
         self.bearings = {n: p.bearings[0] for n, p in self.pipes.items()}
+        height = scene.people.height
+        self.near = {n: float(p.blind_radius(height)[0]) for n, p in self.pipes.items()}   # metres
         self.rng = rng
         self.keep_frames = keep_frames
         self._on: set[int] = set()
@@ -156,11 +158,17 @@ class LiveSource:
 
 
 class PrecomputedSource:
-    """Scanlines computed beforehand for every camera: (frames, n_cams, W) bool."""
+    """Scanlines computed beforehand for every camera: (frames, n_cams, W) bool.
 
-    def __init__(self, scanlines: np.ndarray, bearings: np.ndarray):
+    bearings : (n_cams, W) float, radians; near : optional (n_cams,) float, metres, each
+    camera's blind radius (:meth:`pipeline.Pipeline.blind_radius`), default 0
+    """
+
+    def __init__(self, scanlines: np.ndarray, bearings: np.ndarray, near=None):
         self.all = np.asarray(scanlines, bool)
         self.bearings = {i + 1: b for i, b in enumerate(np.asarray(bearings, float))}
+        near = np.zeros(len(self.bearings)) if near is None else np.asarray(near, float)
+        self.near = {i + 1: float(r) for i, r in enumerate(near)}
 
     def scanlines(self, index: int, positions_xy, numbers: tuple[int, ...]):
         return self.all[index, np.asarray(numbers) - 1], None
@@ -203,7 +211,8 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
         scan, rgb = source.scanlines(t, truth[t], numbers)
         t0 = time.perf_counter()
         bearings = np.array([source.bearings[n] for n in numbers])
-        hull = visual_hull_of_scanlines(xy[tasked], bearings, scan, scene.room.polygon)
+        near = np.array([source.near[n] for n in numbers])
+        hull = visual_hull_of_scanlines(xy[tasked], bearings, scan, scene.room.polygon, near)
         polygons = prune_small(hull, object_area)
         centres = polygon_centres(polygons)
         t1 = time.perf_counter()

@@ -51,15 +51,16 @@ def parse(args) -> dict:
             "frames": args.frames, "m": args.m, "update_every": args.update_every, "params": args.params}
 
 
-def render_scanlines(scene, params, truth: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray]:
-    """All cameras' scanlines over the walk: (frames, n_cams, W) bool and bearings (n_cams, W)."""
+def render_scanlines(scene, params, truth: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """All cameras' scanlines over the walk: (frames, n_cams, W) bool, bearings (n_cams, W)
+    radians and blind radii (n_cams,) metres."""
     from pipeline import Pipeline
     from render import Renderer
 
     with Renderer(scene) as renderer:
         pipe = Pipeline(scene.cameras, params, background=renderer.background().rgb)
         scans = np.stack([pipe.process(renderer.render(p, rng=rng).rgb) for p in truth])
-    return scans, pipe.bearings
+    return scans, pipe.bearings, pipe.blind_radius(scene.people.height)
 
 
 def run_trial(trial: int, opts: dict, seed: int) -> dict:
@@ -72,8 +73,8 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
     scene = with_people(load_scene(opts["scene"]), opts["people"])
     motion_rng, sensor_rng = core.trial_rng(seed, STUDY_ID, trial).spawn(2)
     truth = walk(scene, opts["frames"], motion_rng)
-    scans, bearings = render_scanlines(scene, load_params(opts["params"]), truth, sensor_rng)
-    source = PrecomputedSource(scans, bearings)
+    scans, bearings, near = render_scanlines(scene, load_params(opts["params"]), truth, sensor_rng)
+    source = PrecomputedSource(scans, bearings, near)
     n = len(scene.cameras)
     full = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", n), truth, source)]
     areas = {}

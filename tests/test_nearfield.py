@@ -1,0 +1,166 @@
+"""The near field: blind radii against projection, wedges cut by them, rendered people near cameras."""
+
+import cv2
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from shapely.geometry import Point, box
+
+from pipeline import Pipeline, blind_radius, load_params
+from pipeline.rectify import level_cameras
+from scene import Camera
+from tasking import free_wedges_from_scanlines, visual_hull_of_scanlines
+
+
+def pinhole(height_m: float, pitch_deg: float, yaw_deg: float = 30.0) -> Camera:
+    return Camera.from_pose(1, [1.0, 2.0, height_m], np.radians(yaw_deg), np.radians(pitch_deg),
+                            640, 480, np.radians(49.0), np.zeros(5))
+
+
+def projected_blind_distance(camera: Camera, top: float, step: float = 1e-3) -> float:
+    """Largest floor distance, over the band's columns, at which a point at height ``top``
+    projects (cv2.projectPoints, no distortion) below the raw image's lower pixel edge."""
+    from pipeline.rectify import column_bearings
+
+    Ks, _, width = level_cameras([camera])
+    bearings = column_bearings(camera, Ks[0], width)[::8]
+    d = np.arange(step, 5.0, step)
+    c = camera.center_world
+    pts = np.stack([c[0] + d[None] * np.cos(bearings)[:, None], c[1] + d[None] * np.sin(bearings)[:, None],
+                    np.full((bearings.size, d.size), top)], -1).reshape(-1, 1, 3)
+    rvec = cv2.Rodrigues(camera.R)[0]
+    uv = cv2.projectPoints(pts, rvec, camera.t, camera.K, camera.dist)[0].reshape(bearings.size, d.size, 2)
+    below = uv[..., 1] > camera.height - 0.5
+    return float(d[np.where(below.any(0))[0].max()]) if below.any() else 0.0
+
+
+@pytest.mark.parametrize("height_m, pitch_deg", [(2.2, 15.0), (3.0, 30.0), (2.0, 5.0)])
+def test_blind_radius_is_where_the_objects_top_leaves_the_image(height_m, pitch_deg):
+    camera = pinhole(height_m, pitch_deg)
+    expected = projected_blind_distance(camera, 1.75)
+    got = float(blind_radius([camera], 1.75, margin=0.0)[0])
+    assert expected <= got <= expected + 2e-3
+
+
+def test_blind_radius_at_the_centre_column_of_a_pinhole_camera():
+    """drop / tan(pitch + half the vertical field of view) on the optical axis' column;
+    the band's outer columns look further sideways, so their distance is the larger."""
+    camera = pinhole(2.2, 15.0)
+    half_vfov = np.arctan((camera.height - 0.5 - camera.K[1, 2]) / camera.K[1, 1])
+    centre = 0.45 / np.tan(np.radians(15.0) + half_vfov)
+    got = float(blind_radius([camera], 1.75, margin=0.0)[0])
+    half_hfov = np.radians(49.0) / 2
+    assert centre < got <= centre / np.cos(half_hfov) + 1e-9
+
+
+def test_blind_radius_grows_with_the_margin_and_is_zero_or_inf_at_the_extremes(lab):
+    cams = lab.cameras[:2]
+    r0, r1, r60 = (blind_radius(cams, 1.75, m) for m in (0.0, 1.0, 60.0))
+    assert np.all(r0 < r1) and np.all(r1 < r60)
+    assert np.all(blind_radius(cams, 2.5) == 0.0)           # no higher than the object: seen on the horizon
+    looking_up = pinhole(2.2, -30.0)                         # lower edge above the horizon
+    assert blind_radius([looking_up], 1.0)[0] == np.inf
+    with pytest.raises(ValueError, match="object_height"):
+        blind_radius(cams, 0.0)
+    with pytest.raises(ValueError, match="margin"):
+        blind_radius(cams, 1.75, -1.0)
+
+
+def test_the_pipelines_margin_is_its_threshold_over_alpha_plus_the_opening(lab):
+    params = load_params()
+    pipe = Pipeline(lab.cameras[:1], params)
+    margin = params.column_threshold / params.temporal_alpha + params.opening_kernel
+    assert pipe.blind_radius(1.75)[0] == blind_radius(lab.cameras[:1], 1.75, margin)[0]
+    assert pipe.blind_radius(1.75, truth=True)[0] == blind_radius(lab.cameras[:1], 1.75, 1.0)[0]
+
+
+# --- wedges cut by the near field (hypothesis) ------------------------------------------
+
+rigs = st.fixed_dictionaries({
+    "seed": st.integers(0, 2**32 - 1),
+    "n": st.integers(1, 6),
+    "near": st.floats(0.0, 3.0),
+    "fov": st.floats(0.2, 3.0),
+})
+
+
+def random_rig(rig):
+    """Cameras in a 6 x 5 m room with random scanlines: (xy, bearings, scanlines, room)."""
+    rng = np.random.default_rng(rig["seed"])
+    n, w = rig["n"], 64
+    xy = rng.uniform([0.2, 0.2], [5.8, 4.8], (n, 2))
+    yaw = rng.uniform(-np.pi, np.pi, n)
+    bearings = yaw[:, None] + np.linspace(rig["fov"] / 2, -rig["fov"] / 2, w)[None]
+    scanlines = rng.random((n, w)) < 0.3
+    return xy, bearings, scanlines, box(0, 0, 6, 5)
+
+
+@settings(max_examples=40, deadline=None)
+@given(rigs)
+def test_near_field_wedges_leave_the_blind_disc_and_only_it(rig):
+    xy, bearings, scans, room = random_rig(rig)
+    near = np.full(len(xy), rig["near"])
+    plain = free_wedges_from_scanlines(xy, bearings, scans, room)
+    cut = free_wedges_from_scanlines(xy, bearings, scans, room, near)
+    for c in range(len(xy)):
+        disc = Point(xy[c]).buffer(rig["near"], quad_segs=64)
+        assert cut[c].intersection(disc).area < 1e-12
+        assert cut[c].difference(plain[c]).area < 1e-9              # only ever smaller
+        # what is lost lies within the chords' reach of the disc (at most 8% past its radius)
+        wider = Point(xy[c]).buffer(rig["near"] * 1.09 + 1e-9, quad_segs=64)
+        assert plain[c].difference(cut[c]).difference(wider).area < 1e-9
+    hull, hull_near = (visual_hull_of_scanlines(xy, bearings, scans, room, r) for r in (None, near))
+    assert hull.difference(hull_near).area < 1e-9                  # the hull only grows
+
+
+def test_near_zero_is_the_plain_hull_and_inf_frees_nothing():
+    rig = {"seed": 3, "n": 4, "near": 0.0, "fov": 1.0}
+    xy, bearings, scans, room = random_rig(rig)
+    plain = visual_hull_of_scanlines(xy, bearings, scans, room)
+    assert shapely.equals_exact(plain, visual_hull_of_scanlines(xy, bearings, scans, room, 0.0), 0.0)
+    blind = free_wedges_from_scanlines(xy, bearings, scans, room, [np.inf, 0.5, 0.5, 0.5])
+    assert blind[0].is_empty and not blind[1].is_empty
+    with pytest.raises(ValueError, match="near"):
+        visual_hull_of_scanlines(xy, bearings, scans, room, [0.1, 0.2])
+    with pytest.raises(ValueError, match="near"):
+        visual_hull_of_scanlines(xy, bearings, scans, room, -0.1)
+
+
+# --- rendered people near cameras -------------------------------------------------------
+
+@pytest.mark.render
+def test_hulls_keep_people_who_stand_close_to_a_camera(lab, lab_renderer):
+    """A person 0.5-0.8 m in front of a camera, partly or wholly below its image: with the
+    cameras' blind radii that camera proves none of the person empty, from the true or
+    from the pipeline's scanlines, and the true scanlines' hull keeps every person; without
+    them, the camera clears part of such a person."""
+    pipe = Pipeline(lab.cameras, load_params(), background=lab_renderer.background().rgb)
+    xy, yaw, _ = lab.floor_poses()
+    r, height, room = lab.people.radius, lab.people.height, lab.room.polygon
+    near, gt_near = pipe.blind_radius(height), pipe.blind_radius(height, truth=True)
+    rng = np.random.default_rng(5)
+    cleared_without = []
+    for camera, distance in ((8, 0.574), (0, 0.5), (5, 0.65), (12, 0.8)):
+        # one person in front of `camera`, two elsewhere, all apart and inside the room
+        front = xy[camera] + distance * np.array([np.cos(yaw[camera]), np.sin(yaw[camera])])
+        people = [front]
+        while len(people) < 3:
+            p = rng.uniform([0.5, 0.5], [6.2, 5.3])
+            if all(np.hypot(*(p - q)) > 2 * r + 0.1 for q in people):
+                people.append(p)
+        people = np.array(people)
+        assert room.buffer(-r + 1e-6).contains(Point(front))
+        frame = lab_renderer.render(people, rng=rng)
+        pipe.reset()
+        scans, gt = pipe.process_with_truth(frame.rgb, frame.labels)
+        discs = [Point(p).buffer(r, quad_segs=64) for p in people]
+        for s, rad in ((gt, gt_near), (scans, near)):
+            free = free_wedges_from_scanlines(xy, pipe.bearings, s, room, rad)[camera]
+            assert free.intersection(discs[0]).area < 1e-9
+            plain = free_wedges_from_scanlines(xy, pipe.bearings, s, room)[camera]
+            cleared_without.append(plain.intersection(discs[0]).area)
+        hull = visual_hull_of_scanlines(xy, pipe.bearings, gt, room, gt_near)
+        assert max(d.difference(hull).area for d in discs) < 5e-5           # column quantisation
+    assert max(cleared_without) > 5e-3
