@@ -58,12 +58,21 @@ def test_layout_and_manifest(dataset, lab):
     assert not np.array_equal(a["x"], b["x"])
 
 
-def test_gt_hull_contains_every_person(dataset):
+def test_gt_hull_contains_every_person(dataset, lab):
+    from tasking import visual_hull_of_scanlines
+
     ep = dataset / "episode_0001"
     hull = json.loads((ep / "gt_hull.json").read_text())
     people = read_people(ep / "people.csv")
+    scan = np.load(ep / "scanlines.npz")
+    index = {c.number: i for i, c in enumerate(lab.cameras)}
+    xy = lab.floor_poses()[0][[index[n] for n in scan["camera_numbers"]]]
     assert [f["frame"] for f in hull["frames"]] == [0, 1]
     for rec in hull["frames"]:
+        # docs/dataset.md: the hull of the true scanlines beyond each camera's blind radius
+        again = visual_hull_of_scanlines(xy, scan["bearings"], scan["gt_scanlines"][rec["frame"]],
+                                         lab.room.polygon, near=scan["gt_blind_radius"])
+        assert again.area == pytest.approx(rec["area"], abs=1e-9)
         polys = shapely.MultiPolygon([shapely.Polygon(p["exterior"], p["holes"]) for p in rec["polygons"]])
         # the area is the hull's; its vertices are stored rounded to 1e-6 m
         assert polys.area == pytest.approx(rec["area"], abs=polys.length * 1e-6)
