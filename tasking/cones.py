@@ -70,7 +70,8 @@ def disc_intervals(camera_xy, camera_yaw, centers, radii):
     Returns
     -------
     lo, hi : (n, m) float, radians, camera-local frame (relative to ``camera_yaw``);
-        ``lo`` lies in ``[-3*pi/2, pi)``, ``hi - lo <= 2*pi``.
+        ``lo`` lies in ``[-3*pi/2, pi)`` (``[-2*pi, 0)`` for a camera inside a disc),
+        ``hi - lo <= 2*pi``.
     """
     diff = centers[None, :, :] - camera_xy[:, None, :]
     dist = np.hypot(diff[..., 0], diff[..., 1])

@@ -30,6 +30,8 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon, box
 
+from .hull import overlay_grid
+
 __all__ = ["Coverage", "coverage_cells", "optimal_subset", "subset_areas"]
 
 #: Subsets scored per vectorised block.
@@ -69,7 +71,7 @@ def coverage_cells(wedges, room: Polygon) -> Coverage:
     pad = 0.01 * np.hypot(x1 - x0, y1 - y0)
     edges = shapely.intersection(shapely.boundary(wedges), box(x0 - pad, y0 - pad, x1 + pad, y1 + pad))
     rings = shapely.get_parts(shapely.boundary(room))
-    noded = shapely.union_all(np.concatenate([edges, rings]))
+    noded = shapely.union_all(np.concatenate([edges, rings]), grid_size=overlay_grid(room))   # robust noding
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
     pts = shapely.point_on_surface(faces)
     inside = shapely.contains(room, pts)  # drops faces outside the walls or in holes

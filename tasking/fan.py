@@ -280,6 +280,10 @@ def _tangents(ring: _Ring, cap: np.ndarray):
     return out, s_min, s_max, far, a_min, width
 
 
+#: Distance (relative to a ray's length) within which a ray lies on another cone's edge line.
+COLLINEAR = 1e-12
+
+
 class UnionAreas:
     """Exact areas ``area(room ∩ ⋃_{c in T} wedges[c])`` for many camera sets T at once.
 
@@ -375,22 +379,35 @@ class UnionAreas:
 
     def _rays(self, camera, apex, u0, u1, ra, rd, rcam, rlo, rhi):
         """Cover of each in-room ray piece by the other cameras' open cones, as a dense
-        (ray, cone) table of parameter intervals (the arithmetic of ``cone_areas``)."""
+        (ray, cone) table of parameter intervals (the arithmetic of ``cone_areas``).
+
+        A ray on the edge line of another camera's cone (to ``COLLINEAR`` of the ray's
+        length) is inside that cone when the cone lies on the same side of it as the ray's
+        own cone and belongs to a lower-numbered camera: two cameras' rays along one
+        segment, their cones on one side, are one edge of the union, counted once (the
+        lower camera's ray); cones on opposite sides leave two opposite rays that cancel.
+        """
         nr, q = ra.shape[0], camera.size
         px = ra[:, None, 0] - apex[None, :, 0]
         py = ra[:, None, 1] - apex[None, :, 1]
         dx, dy = rd[:, None, 0], rd[:, None, 1]
         lo = np.zeros((nr, q))
         hi = np.ones((nr, q))
-        for al, be in ((u0[None, :, 0] * py - u0[None, :, 1] * px,
-                        u0[None, :, 0] * dy - u0[None, :, 1] * dx),
-                       (px * u1[None, :, 1] - py * u1[None, :, 0],
-                        dx * u1[None, :, 1] - dy * u1[None, :, 0])):
+        scale = np.hypot(rd[:, 0], rd[:, 1])[:, None] * COLLINEAR
+        lower = camera[None, :] < rcam[:, None]
+        # every ray's own cone is on its left: theta0 rays run outwards, theta1 rays inwards
+        for al, be, edge, left in ((u0[None, :, 0] * py - u0[None, :, 1] * px,
+                                    u0[None, :, 0] * dy - u0[None, :, 1] * dx, u0, 1.0),
+                                   (px * u1[None, :, 1] - py * u1[None, :, 0],
+                                    dx * u1[None, :, 1] - dy * u1[None, :, 0], u1, -1.0)):
+            on = (np.abs(be) <= scale) & (np.abs(al) <= scale)
+            same_side = left * (dx * edge[None, :, 0] + dy * edge[None, :, 1]) > 0
             with np.errstate(divide="ignore", invalid="ignore"):
                 t = -al / be
-            lo = np.where(be > 0, np.maximum(lo, t), lo)
-            hi = np.where(be < 0, np.minimum(hi, t), hi)
-            hi = np.where((be == 0) & (al <= 0), -1.0, hi)
+            inside = on & same_side & lower                 # the constraint holds all along
+            lo = np.where((be > 0) & ~on, np.maximum(lo, t), lo)
+            hi = np.where((be < 0) & ~on, np.minimum(hi, t), hi)
+            hi = np.where(((be == 0) & (al <= 0) & ~on) | (on & ~inside), -1.0, hi)
         lo = np.maximum(lo, rlo[:, None])
         hi = np.minimum(hi, rhi[:, None])
         use = (hi > lo) & (camera[None, :] != rcam[:, None]) & (rhi > rlo)[:, None]

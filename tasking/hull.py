@@ -41,6 +41,8 @@ SLIVER = 1e-12
 #: cascaded union of them all: 16 cameras 2.6 -> 1.2 ms (3 discs), 5.1 -> 4.1 ms (10);
 #: 32: 5.1 -> 2.3, 13.7 -> 8.4 ms; at 64 and 10 discs the union wins (docs/performance.md).
 SEQUENTIAL_MAX = 32
+#: Snap-rounding grid of the hull's overlays, relative to the room's size (:func:`overlay_grid`).
+GRID = 1e-13
 
 __all__ = [
     "SLIVER",
@@ -193,12 +195,36 @@ def hull_from_wedges(wedges, room: Polygon, subset=None) -> BaseGeometry:
         w = w[np.asarray(subset, dtype=np.intp)]
     if w.size == 0:
         return room
+    grid = overlay_grid(room)
     if w.size > SEQUENTIAL_MAX:
-        return drop_slivers(room.difference(shapely.union_all(w)), room)
+        return drop_slivers(shapely.difference(room, shapely.union_all(w, grid_size=grid), grid_size=grid), room)
     hull = room
     for g in w[np.argsort(-shapely.area(w), kind="stable")]:
-        hull = hull.difference(g)
+        hull = polygonal(shapely.difference(hull, g, grid_size=grid))
     return drop_slivers(hull, room)
+
+
+def polygonal(geom: BaseGeometry) -> BaseGeometry:
+    """``geom`` without the points and lines an overlay may leave beside its polygons
+    (a snap-rounded overlay refuses such mixed input)."""
+    if geom.geom_type != "GeometryCollection":
+        return geom
+    parts = [p for p in shapely.get_parts(geom) if p.geom_type in ("Polygon", "MultiPolygon")]
+    return shapely.union_all(parts) if parts else Polygon()
+
+
+def overlay_grid(room: Polygon) -> float:
+    """The precision grid (metres) of the hull's overlays: ``GRID`` times the room's size.
+
+    GEOS's floating overlays can misjudge a polygon edge that runs along a wedge's edge
+    (wedges of cameras whose fields of view line up along a wall or a diagonal): three
+    90-degree corner cameras of an empty square gave an empty hull, one order of them
+    the right triangle. Snap-rounding to a grid far below any length that matters
+    (``grid_size``) makes these overlays robust, at about 1.5-2 times the cost. The
+    taskers' own overlays stay floating: their hulls only rank candidate cameras.
+    """
+    x0, y0, x1, y1 = room.bounds
+    return GRID * max(x1 - x0, y1 - y0)
 
 
 def drop_slivers(geom: BaseGeometry, room: Polygon) -> BaseGeometry:

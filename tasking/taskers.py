@@ -42,7 +42,7 @@ from .clustering import clustering_select, pair_axes
 from .cones import wedge_radius
 from .coverage import coverage_cells, optimal_subset
 from .fan import UnionAreas, cone_areas, convex_ring, ring_edges, split_wide
-from .hull import free_wedges_from_discs, hull_from_wedges
+from .hull import drop_slivers, free_wedges_from_discs, hull_from_wedges
 
 __all__ = [
     "TASKERS",
@@ -136,7 +136,7 @@ def greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones=None
         cand = np.flatnonzero(avail)
         g = gains(h, cand)
         best = int(cand[np.flatnonzero(g >= g.max() - tol)[0]])   # ties within tol: lowest index
-        h = h.difference(wedges[best])
+        h = drop_slivers(h.difference(wedges[best]), room)
         avail[best] = False
         chosen.append(best)
     return chosen, h
@@ -193,7 +193,7 @@ def lazy_greedy_select(wedges, room: Polygon, k: int, start=(), hull=None, cones
                     heapq.heappush(heap, (-g, e[1], rnd))
             heapq.heappush(heap, (neg, c, stamp))
         chosen.append(c)
-        h = h.difference(wedges[c]) if final_hull or rnd < k - 1 else None
+        h = drop_slivers(h.difference(wedges[c]), room) if final_hull or rnd < k - 1 else None
     return chosen, h
 
 
@@ -271,7 +271,7 @@ def greedy_remove(wedges, room: Polygon, current, m: int):
                                                  np.array(suffix[1:-1], dtype=object))
         i = _first_min(shapely.area(without), tol)
         removed.append(kept.pop(i))
-        h = without[i]
+        h = drop_slivers(without[i], room)     # an intersection may hold a stray point or line
     return kept, removed, h
 
 
@@ -298,7 +298,7 @@ def greedy_remove_reference(wedges, room: Polygon, current, m: int):
                                        np.array(suffix[1:], dtype=object))
         i = _first_min(shapely.area(without), tol)
         removed.append(kept.pop(i))
-        h = without[i]
+        h = drop_slivers(without[i], room)     # an intersection may hold a stray point or line
     return kept, removed, h
 
 
