@@ -122,6 +122,13 @@ class ManifestWriter:
         body = [x for i in sorted(self.entries) for x in (b",\n  ", self.entries[i])]
         return [self.before, b'"episodes": [\n  ', *body[1:], b"\n ]", self.after]
 
+    def on_disk(self) -> bool:
+        """Whether the file holds these bytes already."""
+        try:
+            return self.path.read_bytes() == b"".join(self.chunks())
+        except OSError:
+            return False
+
     def add(self, entry: dict) -> None:
         """List a finished episode; rewrite the file when it is due."""
         self.entries[int(entry["index"])] = self._entry_bytes(entry)
@@ -183,6 +190,10 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
     out = Path(out)
     if resume and overwrite:
         raise ValueError("--resume and --overwrite: expected at most one of them")
+    for folder in out.resolve().parents:
+        if folder.name.startswith("episode_") and (folder.parent / MANIFEST).is_file():
+            raise ValueError(f"--out: {out} is inside {folder}, an episode of the dataset {folder.parent}, whose "
+                             "manifest.json checksums its files; choose a folder outside that dataset")
     if out.exists() and not out.is_dir():
         raise FileExistsError(f"--out: {out} exists and is not a directory")
     try:
@@ -302,7 +313,9 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
                 if verified is not None:
                     verified(len(entry["files"]), total)
         remove_unlisted(out, keep)
-    ManifestWriter(out, config, episodes, keep).flush()
+    listing = ManifestWriter(out, config, episodes, keep)
+    if not listing.on_disk():               # a finished run resumed on a full disk: nothing to write
+        listing.flush()
     return keep
 
 
@@ -322,7 +335,7 @@ def exclusive(out: Path):
         yield
     finally:
         if fd is not None:
-            with contextlib.suppress(FileNotFoundError):
+            with contextlib.suppress(OSError):      # gone, or a lost mount: not the error to see
                 os.unlink(path)
             os.close(fd)
 
@@ -362,11 +375,13 @@ def check_same_scene(out: Path, entry: dict, config: EpisodeConfig) -> None:
 
 
 def unlisted(out: Path, entries: dict[int, dict]) -> list[Path]:
-    """The episode folders of ``out`` not in ``entries`` and the temporary folders of unfinished
-    episodes, sorted by name."""
+    """The episode folders of ``out`` not in ``entries``, the temporary folders of unfinished
+    episodes and the temporary files of a manifest or run_info.json being rewritten when the
+    run was killed, sorted by name."""
     wanted = {episode_name(i) for i in entries}
+    temporary = (".episode_", f".{MANIFEST}.", f".{RUN_INFO}.")
     return sorted((p for p in Path(out).iterdir() if p.name not in wanted and (
-        p.name.startswith("episode_") or (p.name.startswith(".episode_") and p.name.endswith(".tmp")))),
+        p.name.startswith("episode_") or (p.name.startswith(temporary) and p.name.endswith(".tmp")))),
         key=lambda p: p.name)
 
 
@@ -379,7 +394,10 @@ def remove_unlisted(out: Path, entries: dict[int, dict] | None = None) -> None:
         m = read_manifest(out)
         entries = {int(e["index"]): e for e in (m or {}).get("episodes", [])}
     for p in unlisted(out, entries):
-        shutil.rmtree(p, ignore_errors=True)
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
 
 
 def _diff(old: dict, config: EpisodeConfig) -> str:
@@ -559,7 +577,8 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                  "episode_hosts": dict(sorted(hosts.items())), "episode_seconds": dict(sorted(stages.items()))}
         if earlier:
             info["earlier_runs"] = earlier
-        write_json_atomic(out / RUN_INFO, info)
+        with contextlib.suppress(*(() if complete else (OSError,))):    # the first error is the one to see
+            write_json_atomic(out / RUN_INFO, info)
     return done
 
 

@@ -1,5 +1,7 @@
 """camtask render: bad input gives one line and exit code 2 before any work starts."""
 
+import os
+
 import pytest
 
 from testbed.cli import main
@@ -250,3 +252,79 @@ def test_workers_that_do_not_see_the_output_folder_are_refused(tmp_path):
     (tmp_path / f"{PROBE}0123").write_text("left by a killed run")
     check_out(tmp_path)                             # not content: not "exists and is not empty"
     assert _read_text(str(tmp_path / "none")) is None
+
+
+def test_out_inside_an_episode_of_a_dataset_is_refused(tmp_path, capsys):
+    dataset = tmp_path / "ds"
+    (dataset / "episode_0002").mkdir(parents=True)
+    (dataset / "manifest.json").write_text("{}")
+    out = dataset / "episode_0002" / "nested"
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", "--frames", "1")
+    assert code == 2 and "is inside" in line and "an episode of the dataset" in line
+    assert not out.exists()
+
+
+def test_resume_removes_the_temporary_files_of_a_killed_manifest_rewrite(tmp_path):
+    from testbed.generate import remove_unlisted, unlisted
+
+    out = tmp_path / "ds"
+    out.mkdir()
+    (out / "manifest.json").write_text('{"episodes": []}')
+    strays = [out / ".manifest.json.k2x9.tmp", out / ".run_info.json.a1b2.tmp"]
+    for p in strays:
+        p.write_text("half")
+    (out / "notes.manifest.json.tmp").write_text("not ours")
+    assert unlisted(out, {}) == sorted(strays)
+    remove_unlisted(out)
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "notes.manifest.json.tmp"]
+
+
+def test_resuming_a_finished_run_does_not_rewrite_its_manifest(tmp_path, monkeypatch):
+    """A finished run resumed on a full disk needs no space: the manifest is not rewritten."""
+    from pipeline import files, load_params
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import prepare_output
+
+    config = EpisodeConfig("lab", None, (2, 7), 4, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    prepare_output(out, config, 3, False, False)
+
+    def full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(files, "write_atomic", full)
+    assert prepare_output(out, config, 3, True, False) == {}
+    with pytest.raises(OSError, match="No space"):            # what changes must still be written
+        prepare_output(out, config, 4, True, False)
+
+
+def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
+    import errno
+
+    from pipeline.files import write_atomic
+
+    def full(src, dst):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr("os.replace", full)
+    target = tmp_path / "manifest.json"
+    with pytest.raises(OSError, match=f"cannot write {target}: No space left on device") as info:
+        write_atomic(target, b"{}")
+    assert info.value.errno == errno.ENOSPC and list(tmp_path.iterdir()) == []
+
+
+def test_the_lock_and_run_info_do_not_hide_the_error_that_stopped_a_run(tmp_path, monkeypatch):
+    from testbed.generate import exclusive
+
+    out = tmp_path / "ds"
+    out.mkdir()
+    real_unlink = os.unlink
+
+    def lost_mount(path, *args, **kwargs):
+        if str(path).endswith(".camtask-render.lock"):
+            raise PermissionError(1, "Operation not permitted")
+        return real_unlink(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "unlink", lost_mount)
+    with pytest.raises(RuntimeError, match="the real error"), exclusive(out):
+        raise RuntimeError("the real error")

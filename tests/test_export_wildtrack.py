@@ -186,3 +186,13 @@ def test_export_refuses_an_out_that_is_in_or_holds_the_dataset(tmp_path, monkeyp
     err = capsys.readouterr().err.strip()
     assert err.startswith("camtask export: error: OUT: ") and message in err and "\n" not in err
     assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before
+
+
+def test_episode_option_that_contradicts_an_episode_dir_is_refused(tmp_path, capsys):
+    episode = tmp_path / "ds" / "episode_0001"
+    episode.mkdir(parents=True)
+    (episode / "meta.json").write_text(json.dumps({"episode": 1}))
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(episode), str(tmp_path / "wt"), "--episode", "5"]) == 2
+    err = capsys.readouterr().err
+    assert "--episode 5: DIR" in err and "is episode 1 itself" in err and not (tmp_path / "wt").exists()

@@ -18,7 +18,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("layout", choices=("wildtrack",), help="output layout")
     p.add_argument("dir", metavar="DIR", help="dataset folder from `camtask render` (or one episode folder)")
     p.add_argument("out", metavar="OUT", help="output folder (must not exist or be empty)")
-    p.add_argument("--episode", type=int, default=0, help="episode index (default 0)")
+    p.add_argument("--episode", type=int, default=None,
+                   help="episode index when DIR is a dataset (default 0); with an episode folder, its own")
     p.add_argument("--undistort", action="store_true",
                    help="pinhole images: frames undistorted to the same camera matrix, zero distortion "
                         "coefficients written (as WILDTRACK's intrinsic_zero; default: the rendered frames "
@@ -35,11 +36,17 @@ def run(args) -> int:
     from testbed.wildtrack import export_wildtrack
 
     root = Path(args.dir)
-    if args.episode < 0:
-        raise ValueError(f"--episode: expected an integer >= 0, got {args.episode}")
-    episode = root if (root / "meta.json").is_file() else root / episode_name(args.episode)
+    index = 0 if args.episode is None else args.episode
+    if index < 0:
+        raise ValueError(f"--episode: expected an integer >= 0, got {index}")
+    episode = root if (root / "meta.json").is_file() else root / episode_name(index)
     if not (episode / "meta.json").is_file():
-        raise FileNotFoundError(f"DIR: no episode {args.episode} in {root} (expected {episode}/meta.json)")
+        raise FileNotFoundError(f"DIR: no episode {index} in {root} (expected {episode}/meta.json)")
+    if episode == root and args.episode is not None:
+        own = json.loads((episode / "meta.json").read_text()).get("episode")
+        if own != args.episode:
+            raise ValueError(f"--episode {args.episode}: DIR {root} is episode {own} itself; give the dataset "
+                             f"folder {root.resolve().parent} to choose another")
     dataset = episode.resolve().parent         # DIR may be an episode of a dataset: keep out of that too
     check_apart(args.out, root, episode, dataset=dataset if (dataset / MANIFEST).is_file() else None)
     check_export_out(args.out, args.overwrite)
