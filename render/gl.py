@@ -20,10 +20,13 @@ environment; that is the caller's choice and is never forced here.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import ctypes.util
 import os
+import signal
 import sys
+import threading
 from types import ModuleType
 
 from scene.checks import check_choice
@@ -124,12 +127,15 @@ def context(preferred: str = "egl"):
         backend = select_backend(preferred)
         os.environ["PYOPENGL_PLATFORM"] = backend
         try:
+            with signals_held():
+                if backend == "egl":
+                    from pyrender.platforms import egl
+                else:
+                    from pyrender.platforms import osmesa
             if backend == "egl":
-                from pyrender.platforms import egl
                 platform = egl.EGLPlatform(1, 1, device=egl.get_default_device())
             else:
-                from pyrender.platforms.osmesa import OSMesaPlatform
-                platform = OSMesaPlatform(1, 1)
+                platform = osmesa.OSMesaPlatform(1, 1)
             platform.init_context()
         except Exception as exc:  # the library loaded but no context could be made
             raise _failure([(backend, f"context creation failed ({type(exc).__name__}: {exc})")]) from exc
@@ -150,6 +156,29 @@ def pyrender() -> ModuleType:
     """The ``pyrender`` module, imported with the process's backend selected."""
     if _CONTEXT is None and _imported_platform() is None:
         os.environ["PYOPENGL_PLATFORM"] = select_backend("egl")
-    import pyrender as _pyrender
+    with signals_held():
+        import pyrender as _pyrender
 
     return _pyrender
+
+
+@contextlib.contextmanager
+def signals_held():
+    """Hold Ctrl-C and SIGTERM while pyrender is imported, then deliver the first that came.
+
+    trimesh, which pyrender imports, imports its optional parts inside ``except
+    BaseException``: a KeyboardInterrupt raised there was swallowed, and the run went on
+    to exit 0. Only the main thread receives signals; elsewhere this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+    held = {s: signal.signal(s, lambda signum, frame: came.append(signum)) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, handler in held.items():
+            signal.signal(s, signal.SIG_DFL if handler is None else handler)
+        if came:
+            signal.raise_signal(came[0])
