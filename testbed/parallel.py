@@ -107,18 +107,28 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
     # ms per 16-camera frame, docs/performance.md). Workers keep glibc's defaults.
     spawn_env = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ").items()
                  if not k.startswith("MALLOC_")}
-    with warnings.catch_warnings(), dask.config.set({"distributed.nanny.pre-spawn-environ": spawn_env}):
-        warnings.simplefilter("ignore", UserWarning)  # "port 8787 in use" when several clusters run
-        cluster = LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-            silence_logs=logging.CRITICAL, env=dict(WORKER_ENV), preload=[__name__],
-        )
-    client = Client(cluster)
+    from render.gl import signals_held
+
+    cluster = client = None
     try:
+        # Ctrl-C and SIGTERM wait until the cluster has started, then stop the run as usual:
+        # half-started, it printed tracebacks (a nanny that failed to start, an atexit
+        # assertion). A worker still importing when a Ctrl-C reaches the terminal's process
+        # group (before dask_setup ignores SIGINT) can still print its own.
+        with signals_held():
+            with warnings.catch_warnings(), dask.config.set({"distributed.nanny.pre-spawn-environ": spawn_env}):
+                warnings.simplefilter("ignore", UserWarning)  # "port 8787 in use" when several clusters run
+                cluster = LocalCluster(
+                    n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                    silence_logs=logging.CRITICAL, env=dict(WORKER_ENV), preload=[__name__],
+                )
+            client = Client(cluster)
         yield client
     finally:
-        client.close()
-        cluster.close()
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def run_tasks(

@@ -2,6 +2,8 @@
 
 import os
 
+import pytest
+
 from testbed.parallel import open_client
 
 
@@ -35,3 +37,34 @@ def test_local_workers_ignore_ctrl_c():
     # must not each print a KeyboardInterrupt traceback (end to end: test_dataset_worker_death)
     with open_client(2) as client:
         assert list(client.run(_sigint_handler).values()) == [True, True]
+
+
+def test_ctrl_c_while_a_local_cluster_starts_waits_for_it_then_closes_it(monkeypatch):
+    """A half-started LocalCluster printed tracebacks: the signal is held until it has
+    started, then stops the run and the cluster is closed as usual."""
+    import signal
+
+    import distributed
+
+    events = []
+
+    class Cluster:
+        def __init__(self, **kwargs):
+            os.kill(os.getpid(), signal.SIGINT)        # Ctrl-C while the workers start
+            events.append("started")
+
+        def close(self):
+            events.append("cluster closed")
+
+    class Client:
+        def __init__(self, cluster):
+            events.append("client")
+
+        def close(self):
+            events.append("client closed")
+
+    monkeypatch.setattr(distributed, "LocalCluster", Cluster)
+    monkeypatch.setattr(distributed, "Client", Client)
+    with pytest.raises(KeyboardInterrupt), open_client(2):
+        events.append("body")
+    assert events == ["started", "client", "client closed", "cluster closed"]
