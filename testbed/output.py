@@ -17,21 +17,25 @@ from pipeline.files import write_atomic
 
 def check_output_file(option: str, path: str | os.PathLike, suffix: str | None = None) -> Path:
     """``path`` as a Path, or a one-line ValueError naming ``option``: a file name (with
-    ``suffix``, e.g. ``".png"``, any case, when given) whose folder exists or can be made.
+    ``suffix``, e.g. ``".png"``, any case, when given) whose folder exists or is made here.
 
-    >>> check_output_file("--plot", "out/fig.png", ".png")
-    PosixPath('out/fig.png')
+    >>> import tempfile
+    >>> check_output_file("--plot", f"{tempfile.mkdtemp()}/new/fig.png", ".png").parent.is_dir()
+    True
     """
     p = Path(path)
     if suffix is not None and p.suffix.lower() != suffix:
         raise ValueError(f"{option}: expected a {suffix} file name, got {str(path)!r}")
     if p.is_dir():
         raise ValueError(f"{option}: {p} is a folder; expected a file name")
-    folder = p.parent
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
-    if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
-        raise ValueError(f"{option}: cannot write to {p.parent} ({folder} is not a writable folder)")
+    if p.parent.exists() and not p.parent.is_dir():
+        raise ValueError(f"{option}: cannot write to {p.parent} (not a folder)")
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)     # now, not after the run: a dangling link, /proc
+    except OSError as exc:
+        raise ValueError(f"{option}: cannot make the folder {p.parent} ({exc.strerror or exc})") from None
+    if not os.access(p.parent, os.W_OK | os.X_OK):
+        raise ValueError(f"{option}: cannot write to {p.parent} (not a writable folder)")
     return p
 
 

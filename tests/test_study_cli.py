@@ -132,7 +132,13 @@ def test_a_plot_in_a_new_folder_is_made_whole_and_a_plot_under_a_file_refused_fi
     assert cli.main(["study", *CAMERAS, "--workers", "0", "--plot", str(tmp_path / "file" / "c.png")]) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err.strip() == (
-        f"camtask study: error: --plot: cannot write to {tmp_path / 'file'} ({tmp_path / 'file'} is not a writable folder)")
+        f"camtask study: error: --plot: cannot write to {tmp_path / 'file'} (not a folder)")
+    # a folder that cannot be made (a dangling link) is refused before the study too
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere" / "deeper")
+    assert cli.main(["study", *CAMERAS, "--workers", "0", "--plot", str(tmp_path / "dangling" / "c.png")]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.startswith(
+        f"camtask study: error: --plot: cannot make the folder {tmp_path / 'dangling'} (")
 
 
 def test_clustering_draws_the_same_whatever_its_place_in_taskers(capsys):

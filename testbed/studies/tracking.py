@@ -165,9 +165,11 @@ def plot(result: dict, path: str) -> None:
         ax.plot(truth[:, 0], truth[:, 1], "k-", lw=2, label="true track")
         est = follow(truth, ep["track_ids"], ep["track_xy"], 3 * opts["radius"])
         ax.plot(est[:, 0], est[:, 1], "r.-", ms=3, lw=0.8, label="estimated track")
-        ax.set_title(f"{tasker} k={k}: MSE {ep['mse']:.4f}", fontsize=10)
+        seen = ~np.isnan(est[:, 0])
+        err = f"{np.mean(np.sum((est[seen] - truth[seen]) ** 2, axis=1)):.4f}" if seen.any() else "-"
+        ax.set_title(f"{tasker} k={k}: this track's MSE {err}\n(all objects {ep['mse']:.4f})", fontsize=9)
         ax.set_aspect("equal")
-        ax.set(xlim=(-1.05, 1.05), ylim=(-1.05, 1.05))
+        ax.set(xlim=(-1.05, 1.05), ylim=(-1.05, 1.05), xlabel="x (room radii)", ylabel="y (room radii)")
         ax.legend(loc="lower right", fontsize=7)
     fig.suptitle(f"Fig. 14: one of {opts['objects']} objects, true and estimated tracks")
     fig.tight_layout()
