@@ -88,6 +88,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
 
     if scheduler is not None:
         address = scheduler if "://" in scheduler else f"tcp://{scheduler}"
+        check_scheduler(address, connect_timeout)
         try:
             client = Client(address, timeout=f"{connect_timeout}s")
         except (OSError, TimeoutError, ValueError) as exc:
@@ -129,6 +130,33 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
             client.close()
         if cluster is not None:
             cluster.close()
+
+
+def check_scheduler(address: str, timeout: float) -> None:
+    """A one-line ValueError unless a Dask scheduler at ``address`` answers "identity" within
+    ``timeout`` seconds. ``Client`` alone waited forever on a port that accepts and never
+    answers (the dashboard's, an HTTP server) and crashed on one that answers garbage."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def identity():
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        reply = asyncio.run(asyncio.wait_for(identity(), timeout))
+    except (TimeoutError, OSError) as exc:
+        why = str(exc).splitlines()[0] if str(exc) else f"no answer within {timeout:g} s"
+        raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({why})") from None
+    except Exception as exc:  # noqa: BLE001 - whatever the other end sent, it was not Dask's answer
+        raise ValueError(f"scheduler: {address} is not a Dask scheduler ({type(exc).__name__})") from None
+    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
+        raise ValueError(f"scheduler: {address} is not a Dask scheduler (it answered {str(reply)[:60]!r})")
 
 
 def run_tasks(

@@ -68,3 +68,38 @@ def test_ctrl_c_while_a_local_cluster_starts_waits_for_it_then_closes_it(monkeyp
     with pytest.raises(KeyboardInterrupt), open_client(2):
         events.append("body")
     assert events == ["started", "client", "client closed", "cluster closed"]
+
+
+@pytest.mark.parametrize(("answer", "message"), [
+    (None, "cannot reach a Dask scheduler at tcp://127.0.0.1:{port} (no answer within 1 s)"),
+    (b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n", "tcp://127.0.0.1:{port} is not a Dask scheduler"),
+])
+def test_a_port_that_is_not_a_dask_scheduler_is_one_line(answer, message):
+    """The dashboard's port accepts and never answers: Client waited forever; a server that
+    answers something else crashed it with a 3 EiB allocation."""
+    import socket
+    import threading
+
+    from testbed.parallel import check_scheduler
+
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+    held = []
+
+    def serve():
+        conn, _ = server.accept()
+        held.append(conn)
+        conn.recv(4096)
+        if answer is not None:
+            conn.sendall(answer)
+
+    threading.Thread(target=serve, daemon=True).start()
+    try:
+        with pytest.raises(ValueError) as info:
+            check_scheduler(f"tcp://127.0.0.1:{port}", 1.0)
+        assert str(info.value).startswith(f"scheduler: {message.format(port=port)}")
+        assert "\n" not in str(info.value)
+    finally:
+        for conn in held:
+            conn.close()
+        server.close()

@@ -137,6 +137,10 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     try:
         with open_client(workers, args.scheduler) as client:
             if args.scheduler is not None:
+                if not client.scheduler_info().get("workers"):      # checked below, then rendered
+                    print(f"warning: --scheduler: no worker has joined {args.scheduler} yet; waiting for one "
+                          "(Ctrl-C stops)", file=sys.stderr)
+                    client.wait_for_workers(1)
                 check_worker_versions(client)
                 check_workers_share(client, out)
             bars = []                                 # resuming reads back every kept episode
