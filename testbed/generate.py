@@ -40,8 +40,8 @@ MANIFEST = "manifest.json"
 RUN_INFO = "run_info.json"
 #: Locked (``flock``) by the run writing DIR, deleted when it ends; see :func:`exclusive`.
 LOCK = ".camtask-render.lock"
-#: Prefix of the file :func:`check_workers_share` writes into DIR and removes (a killed run
-#: may leave one: not content).
+#: Prefix of the files :func:`check_out` and :func:`check_workers_share` write into DIR and
+#: remove (a killed run may leave one: not content).
 PROBE = ".camtask-probe."
 #: 2: BLAKE3 checksums named by ``checksum``; 1: sha256, no ``checksum`` key (still resumable).
 FORMAT_VERSION = 2
@@ -198,7 +198,7 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
         raise FileExistsError(f"--out: {out} exists and is not a directory")
     try:
         out.mkdir(parents=True, exist_ok=True)
-        probe = out / f".write-test.{os.getpid()}"
+        probe = out / f"{PROBE}write-test.{os.getpid()}"
         probe.write_bytes(b"")
         probe.unlink()
     except OSError as exc:

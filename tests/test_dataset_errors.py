@@ -328,3 +328,17 @@ def test_the_lock_and_run_info_do_not_hide_the_error_that_stopped_a_run(tmp_path
     monkeypatch.setattr(os, "unlink", lost_mount)
     with pytest.raises(RuntimeError, match="the real error"), exclusive(out):
         raise RuntimeError("the real error")
+
+
+def test_a_write_probe_left_by_a_killed_run_is_not_content(tmp_path, monkeypatch):
+    import pathlib
+
+    from testbed.generate import check_out
+
+    out = tmp_path / "ds"
+    with monkeypatch.context() as m:
+        m.setattr(pathlib.Path, "unlink", lambda self, missing_ok=False: None)    # killed before removing it
+        check_out(out)
+    assert len(list(out.iterdir())) == 1                    # the probe it wrote is still there
+    assert check_out(out) == out                            # and is not content: no "not empty"
+    assert check_out(out, resume=True) == out               # nor "not a camtask render dataset"
