@@ -209,8 +209,8 @@ def polygonal(geom: BaseGeometry) -> BaseGeometry:
     (a snap-rounded overlay refuses such mixed input)."""
     if geom.geom_type != "GeometryCollection":
         return geom
-    parts = [p for p in shapely.get_parts(geom) if p.geom_type in ("Polygon", "MultiPolygon")]
-    return shapely.union_all(parts) if parts else Polygon()
+    parts = [p for p in shapely.get_parts(geom) if p.geom_type == "Polygon"]     # disjoint: one overlay's
+    return MultiPolygon(parts) if len(parts) > 1 else parts[0] if parts else Polygon()
 
 
 def overlay_grid(room: Polygon) -> float:
