@@ -45,9 +45,11 @@ def write_atomic(path: str | os.PathLike, data: bytes | Iterable[bytes]) -> None
         with os.fdopen(fd, "wb") as fh:
             fh.write(data) if isinstance(data, bytes | bytearray | memoryview) else fh.writelines(data)
         os.replace(tmp, path)
-    except OSError as exc:                  # a full disk: say which file
+    except OSError as exc:                  # a full disk: say which file, as testbed.png does
         tmp.unlink(missing_ok=True)
-        raise OSError(exc.errno, f"cannot write {path}: {exc.strerror or exc}") from None
+        error = OSError(f"cannot write {path}: {exc.strerror or exc}")
+        error.errno = exc.errno
+        raise error from None
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise

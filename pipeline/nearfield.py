@@ -22,10 +22,9 @@ never sees a low object there: radius ``inf`` (it proves nothing empty).
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 
-from .rectify import level_cameras, level_rotation
+from .rectify import level_cameras, level_points
 
 __all__ = ["blind_radius", "lower_edge"]
 
@@ -42,11 +41,7 @@ def lower_edge(camera, K_virtual: np.ndarray, width: int) -> np.ndarray:
     from top to bottom.
     """
     us = np.linspace(-0.5, camera.width - 0.5, EDGE_POINTS)
-    pts = np.stack([us, np.full_like(us, camera.height - 0.5)], 1).reshape(-1, 1, 2)
-    norm = cv2.undistortPoints(pts, camera.K, camera.dist, None, None, None,
-                               (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10))
-    rays = np.concatenate([norm.reshape(-1, 2), np.ones((EDGE_POINTS, 1))], 1) @ level_rotation(camera).T
-    x, y = rays[:, 0] / rays[:, 2], rays[:, 1] / rays[:, 2]
+    x, y = level_points(camera, np.stack([us, np.full_like(us, camera.height - 0.5)], 1))
     order = np.argsort(x)
     columns = (np.arange(width) - K_virtual[0, 2]) / K_virtual[0, 0]
     return np.interp(columns, x[order], y[order])

@@ -52,15 +52,21 @@ def virtual_extent(camera: Camera) -> tuple[float, float, float, float]:
     right edges at every row); y: the full vertical extent of the raw image.
     """
     per_side = 64
-    pts = _border_points(camera.width, camera.height, per_side).reshape(-1, 1, 2)
+    x, y = level_points(camera, _border_points(camera.width, camera.height, per_side))
+    left, right = x[2 * per_side:3 * per_side], x[3 * per_side:]
+    return float(left.max()), float(right.min()), float(y.min()), float(y.max())
+
+
+def level_points(camera: Camera, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Raw image points (m, 2) float (u, v) pixels -> their (x, y) on the level virtual
+    camera's z = 1 plane (lens distortion removed, pitch turned level); (m,) each."""
+    pts = np.asarray(uv, dtype=float).reshape(-1, 1, 2)
     norm = cv2.undistortPoints(pts, camera.K, camera.dist, None, None, None,
                                (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10))
     rays = np.concatenate([norm.reshape(-1, 2), np.ones((len(pts), 1))], 1) @ level_rotation(camera).T
     if np.any(rays[:, 2] <= 0.05):
         raise ValueError(f"camera {camera.number}: field of view too wide to rectify to a level camera")
-    x, y = rays[:, 0] / rays[:, 2], rays[:, 1] / rays[:, 2]
-    left, right = x[2 * per_side:3 * per_side], x[3 * per_side:]
-    return float(left.max()), float(right.min()), float(y.min()), float(y.max())
+    return rays[:, 0] / rays[:, 2], rays[:, 1] / rays[:, 2]
 
 
 def check_rectifiable(cameras) -> None:

@@ -218,8 +218,8 @@ def overlay_grid(room: Polygon) -> float:
 
     GEOS's floating overlays can misjudge a polygon edge that runs along a wedge's edge
     (wedges of cameras whose fields of view line up along a wall or a diagonal): three
-    90-degree corner cameras of an empty square gave an empty hull, one order of them
-    the right triangle. Snap-rounding to a grid far below any length that matters
+    90-degree corner cameras of an empty square gave an empty hull in three of the six
+    orders of the cameras, the right triangle in the others. Snap-rounding to a grid far below any length that matters
     (``grid_size``) makes these overlays robust, at about 1.5-2 times the cost. The
     taskers' own overlays stay floating: their hulls only rank candidate cameras.
     """

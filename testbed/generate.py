@@ -45,6 +45,10 @@ LOCK = ".camtask-render.lock"
 PROBE = ".camtask-probe."
 #: 2: BLAKE3 checksums named by ``checksum``; 1: sha256, no ``checksum`` key (still resumable).
 FORMAT_VERSION = 2
+#: What an episode holds. 2: ``scanlines.npz`` has the blind radii and ``gt_hull.json`` is
+#: carved beyond them; 1 (manifests without ``episode_layout``): before. A run is not
+#: resumed across layouts: its episodes would differ in kind, not just in bytes.
+EPISODE_LAYOUT = 2
 
 
 def write_json_atomic(path: Path, data: dict) -> None:
@@ -81,7 +85,8 @@ def _manifest_shape_problem(m) -> str | None:
 
 
 def manifest(config: EpisodeConfig, episodes: int, entries: dict[int, dict]) -> dict:
-    return {"format_version": FORMAT_VERSION, "checksum": ALGORITHM, "episodes_planned": episodes,
+    return {"format_version": FORMAT_VERSION, "episode_layout": EPISODE_LAYOUT, "checksum": ALGORITHM,
+            "episodes_planned": episodes,
             "config": config.to_dict(), "episodes": [entries[i] for i in sorted(entries)]}
 
 
@@ -303,6 +308,11 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
                                  "extend a run, not shrink it")
             algorithm = manifest_algorithm(old)
             listed = old.get("episodes", [])
+            layout = int(old.get("episode_layout", 1))
+            if listed and layout != EPISODE_LAYOUT:
+                raise ValueError(f"--resume: the episodes in {out} are of layout {layout} (an earlier camtask), this "
+                                 f"camtask writes layout {EPISODE_LAYOUT} (docs/dataset.md); finish the run with the "
+                                 "camtask that started it, or use --overwrite to start again")
             total = sum(len(e["files"]) for e in listed)
             for entry in listed:
                 if verify_episode(out, entry, algorithm):

@@ -8,6 +8,7 @@ and figures are drawn to memory and written through a temporary file beside the 
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 from pathlib import Path
@@ -17,11 +18,14 @@ from pipeline.files import write_atomic
 
 def check_output_file(option: str, path: str | os.PathLike, suffix: str | None = None) -> Path:
     """``path`` as a Path, or a one-line ValueError naming ``option``: a file name (with
-    ``suffix``, e.g. ``".png"``, any case, when given) whose folder exists or is made here.
+    ``suffix``, e.g. ``".png"``, any case, when given) whose folder exists or can be made.
+    Missing folders are made to find out (a dangling link, ``/proc``) and removed again:
+    the command may still stop on another argument, and the file is written at the end.
 
     >>> import tempfile
-    >>> check_output_file("--plot", f"{tempfile.mkdtemp()}/new/fig.png", ".png").parent.is_dir()
-    True
+    >>> top = tempfile.mkdtemp()
+    >>> check_output_file("--plot", f"{top}/new/fig.png", ".png").name, os.listdir(top)
+    ('fig.png', [])
     """
     p = Path(path)
     if suffix is not None and p.suffix.lower() != suffix:
@@ -30,12 +34,17 @@ def check_output_file(option: str, path: str | os.PathLike, suffix: str | None =
         raise ValueError(f"{option}: {p} is a folder; expected a file name")
     if p.parent.exists() and not p.parent.is_dir():
         raise ValueError(f"{option}: cannot write to {p.parent} (not a folder)")
+    missing = [f for f in (p.parent, *p.parent.parents) if not f.exists()]   # deepest first
     try:
-        p.parent.mkdir(parents=True, exist_ok=True)     # now, not after the run: a dangling link, /proc
+        p.parent.mkdir(parents=True, exist_ok=True)
+        if not os.access(p.parent, os.W_OK | os.X_OK):
+            raise ValueError(f"{option}: cannot write to {p.parent} (not a writable folder)")
     except OSError as exc:
         raise ValueError(f"{option}: cannot make the folder {p.parent} ({exc.strerror or exc})") from None
-    if not os.access(p.parent, os.W_OK | os.X_OK):
-        raise ValueError(f"{option}: cannot write to {p.parent} (not a writable folder)")
+    finally:
+        for folder in missing:
+            with contextlib.suppress(OSError):
+                folder.rmdir()
     return p
 
 

@@ -139,9 +139,12 @@ def check_scheduler(address: str, timeout: float) -> None:
     import asyncio
 
     from distributed.comm import connect
+    from distributed.security import Security
+
+    security = Security().get_connection_args("client")     # as Client's: the Dask config's TLS settings
 
     async def identity():
-        comm = await connect(address, timeout=timeout)
+        comm = await connect(address, timeout=timeout, **security)
         try:
             await comm.write({"op": "identity", "reply": True})
             return await comm.read()

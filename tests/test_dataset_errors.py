@@ -310,6 +310,7 @@ def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
     target = tmp_path / "manifest.json"
     with pytest.raises(OSError, match=f"cannot write {target}: No space left on device") as info:
         write_atomic(target, b"{}")
+    assert str(info.value) == f"cannot write {target}: No space left on device"
     assert info.value.errno == errno.ENOSPC and list(tmp_path.iterdir()) == []
 
 
@@ -342,3 +343,24 @@ def test_a_write_probe_left_by_a_killed_run_is_not_content(tmp_path, monkeypatch
     assert len(list(out.iterdir())) == 1                    # the probe it wrote is still there
     assert check_out(out) == out                            # and is not content: no "not empty"
     assert check_out(out, resume=True) == out               # nor "not a camtask render dataset"
+
+
+def test_run_info_that_cannot_be_written_does_not_hide_the_error_that_stopped_the_run(tmp_path, monkeypatch):
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 2, False, False)
+
+    def full(*args, **kwargs):
+        raise OSError("cannot write DIR/.episode_0000.x.tmp/frames/cam02/000000.png: No space left on device")
+
+    def run_info(path, data):
+        raise OSError(f"cannot write {path}: No space left on device")
+
+    monkeypatch.setattr(gen, "render_episode", full)
+    monkeypatch.setattr(gen, "write_json_atomic", run_info)
+    with pytest.raises(OSError, match="000000.png: No space"):
+        gen.generate(config, 2, out, {})

@@ -1,6 +1,7 @@
 """The local Dask cluster's workers: environment."""
 
 import os
+import shutil
 
 import pytest
 
@@ -103,3 +104,25 @@ def test_a_port_that_is_not_a_dask_scheduler_is_one_line(answer, message):
         for conn in held:
             conn.close()
         server.close()
+
+
+@pytest.mark.skipif(shutil.which("openssl") is None, reason="needs openssl for a self-signed certificate")
+def test_a_tls_scheduler_set_up_in_the_dask_config_passes_the_check(tmp_path):
+    """The check connects as Client does, with the Dask config's TLS settings."""
+    import subprocess
+
+    import dask
+    from distributed import LocalCluster
+    from distributed.security import Security
+
+    from testbed.parallel import check_scheduler
+
+    cert, key = tmp_path / "cert.pem", tmp_path / "key.pem"
+    subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=localhost", "-days", "1",
+                    "-keyout", str(key), "-out", str(cert)], check=True, capture_output=True)
+    tls = {"distributed.comm.tls.ca-file": str(cert), "distributed.comm.require-encryption": True} | {
+        f"distributed.comm.tls.{who}.{part}": str(path) for who in ("scheduler", "client", "worker")
+        for part, path in (("cert", cert), ("key", key))}
+    with dask.config.set(tls), LocalCluster(n_workers=0, processes=False, protocol="tls", dashboard_address=None,
+                                            security=Security()) as cluster:
+        check_scheduler(cluster.scheduler_address, 5.0)

@@ -146,3 +146,9 @@ def test_clustering_draws_the_same_whatever_its_place_in_taskers(capsys):
     alone = run_json(capsys, *args, "--taskers", "clustering")["records"]
     second = run_json(capsys, *args, "--taskers", "greedy,uniform,clustering")["records"]
     assert alone == [r for r in second if r["tasker"] == "clustering"]
+
+
+def test_a_run_refused_on_another_argument_leaves_no_plot_folder(capsys, tmp_path):
+    png = tmp_path / "new" / "deeper" / "c.png"
+    assert cli.main(["study", "cameras", "--objects", "0", "--plot", str(png)]) == 2
+    assert "--objects" in capsys.readouterr().err and list(tmp_path.iterdir()) == []

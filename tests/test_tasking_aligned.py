@@ -29,8 +29,8 @@ def seen_by_none(points, xy, yaw, fov):
 @pytest.mark.parametrize("order", list(itertools.permutations(range(3))))
 def test_three_corner_cameras_leave_the_triangle_nobody_sees_in_any_order(order):
     """Cameras in three corners of an empty 4 m square, 90 degrees, edges along the walls and
-    the diagonal: the triangle (4, 0), (4, 4), (2, 2) is seen by none. One order of the
-    overlays used to give an empty hull."""
+    the diagonal: the triangle (4, 0), (4, 4), (2, 2) is seen by none. Three of the six
+    orders of the cameras used to give an empty hull."""
     room = box(0, 0, 4, 4)
     xy = np.array([[4.0, 4.0], [0.0, 4.0], [4.0, 0.0]])[list(order)]
     yaw = np.radians([180.0, -90.0, 180.0])[list(order)]
