@@ -161,3 +161,21 @@ def test_tune_refuses_a_seed_optuna_cannot_take(tmp_path, render_dir):
         with pytest.raises(ValueError, match=f"--seed: expected an integer in 0..4294967295, got {seed}"):
             camtask(["tune", str(render_dir), "--trials", "1", "--seed", seed, "--out", str(tmp_path / "p.yaml")])
     assert not (tmp_path / "p.yaml").exists()
+
+
+def test_scanlines_records_the_blind_radii_of_the_shortest_person(render_dir, sequence, tmp_path, capsys):
+    import shutil
+
+    root = tmp_path / "render"
+    shutil.copytree(render_dir, root)
+    (root / "scanlines.npz").unlink(missing_ok=True)
+    assert camtask(["scanlines", str(root), "--frames", "1"]) == 0
+    assert "blind_radius" not in np.load(root / "scanlines.npz").files          # no people.csv: no heights
+    (root / "people.csv").write_text("frame,person_id,x,y,radius,height\n0,0,1.0,2.0,0.25,1.75\n"
+                                     "0,1,3.0,2.0,0.25,1.6\n")
+    capsys.readouterr()
+    assert camtask(["scanlines", str(root), "--frames", "1", "--json"]) == 0
+    pipe = Pipeline(sequence[0], PipelineParams.from_mapping(json.loads(capsys.readouterr().out)["params"]))
+    with np.load(root / "scanlines.npz") as z:
+        np.testing.assert_array_equal(z["blind_radius"], pipe.blind_radius(1.6))
+        np.testing.assert_array_equal(z["gt_blind_radius"], pipe.blind_radius(1.6, truth=True))

@@ -73,8 +73,14 @@ def _run_render(args, params) -> int:
     with tqdm(total=n, desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
         result = run_sequence(pipe, (render.frames(i) for i in range(n)),
                               (render.labels(i) for i in range(n)), progress=lambda: bar.update())
+    radii = {}
+    if (render.root / "people.csv").is_file():      # the people's height: how close to a camera they go unseen
+        from testbed.dataset import read_people
+
+        height = float(np.min(np.atleast_1d(read_people(render.root / "people.csv")["height"])))
+        radii = {"blind_radius": pipe.blind_radius(height), "gt_blind_radius": pipe.blind_radius(height, truth=True)}
     save_npz_atomic(out, scanlines=result.scanlines, gt_scanlines=result.gt_scanlines,
-                    bearings=result.bearings, camera_numbers=np.array([c.number for c in render.cameras]))
+                    bearings=result.bearings, camera_numbers=np.array([c.number for c in render.cameras]), **radii)
     metrics = result.metrics() | {"params": params.to_dict(), "out": str(out)}
     _report(metrics, [c.number for c in render.cameras], args.json)
     return 0
