@@ -163,7 +163,7 @@ def test_tune_refuses_a_seed_optuna_cannot_take(tmp_path, render_dir):
     assert not (tmp_path / "p.yaml").exists()
 
 
-def test_scanlines_records_the_blind_radii_of_the_shortest_person(render_dir, sequence, tmp_path, capsys):
+def test_scanlines_records_the_blind_radii_of_the_shortest_person(render_dir, tmp_path, capsys):
     import shutil
 
     root = tmp_path / "render"
@@ -175,7 +175,10 @@ def test_scanlines_records_the_blind_radii_of_the_shortest_person(render_dir, se
                                      "0,1,3.0,2.0,0.25,1.6\n")
     capsys.readouterr()
     assert camtask(["scanlines", str(root), "--frames", "1", "--json"]) == 0
-    pipe = Pipeline(sequence[0], PipelineParams.from_mapping(json.loads(capsys.readouterr().out)["params"]))
+    from pipeline.io import RenderDir
+
+    params = PipelineParams.from_mapping(json.loads(capsys.readouterr().out)["params"])
+    pipe = Pipeline(RenderDir(root).cameras, params)            # the calibration as the command read it
     with np.load(root / "scanlines.npz") as z:
         np.testing.assert_array_equal(z["blind_radius"], pipe.blind_radius(1.6))
         np.testing.assert_array_equal(z["gt_blind_radius"], pipe.blind_radius(1.6, truth=True))
