@@ -44,6 +44,9 @@ class LoopConfig:
     update_every : re-task every this many frames (1 = every frame)
     feedback : "hull" (the paper: previous hull's polygon centres) or "tracks" (the
         tracker's confirmed, temporally supported estimates, falling back to the hull)
+    near_field : each camera carves the hull only beyond its blind radius (the source's
+        ``near``, docs/pipeline.md), so that the hull keeps a person standing below its
+        image; False: from the camera centre, as the paper's cameras
     """
 
     tasker: str = "incremental"
@@ -51,6 +54,7 @@ class LoopConfig:
     m: int = 1
     update_every: int = 1
     feedback: str = "hull"
+    near_field: bool = True
 
     def check(self, n_cameras: int, *, as_options: bool = False) -> LoopConfig:
         """Raise a one-line ValueError naming the bad field (as its command-line option,
@@ -211,7 +215,7 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
         scan, rgb = source.scanlines(t, truth[t], numbers)
         t0 = time.perf_counter()
         bearings = np.array([source.bearings[n] for n in numbers])
-        near = np.array([source.near[n] for n in numbers])
+        near = np.array([source.near[n] for n in numbers]) if config.near_field else None
         hull = visual_hull_of_scanlines(xy[tasked], bearings, scan, scene.room.polygon, near)
         polygons = prune_small(hull, object_area)
         centres = polygon_centres(polygons)

@@ -168,3 +168,15 @@ def test_demo_writes_its_video_summary_and_top_view_and_same_seed_same_summary(t
     assert len(doc["frames"]) == 3 and doc["summary"]["seed"] == 1                   # the default seed
     assert (tmp_path / "a" / "summary.json").read_bytes() == (tmp_path / "b" / "summary.json").read_bytes()
     assert "mean residual" in capsys.readouterr().out
+
+
+def test_the_near_field_switch_chooses_where_cameras_carve(lab_episode):
+    """With blind radii the hull only grows (each camera carves less); near_field=False
+    is the hull of radii 0, the paper's."""
+    scene, truth, source = lab_episode
+    near = PrecomputedSource(source.all, np.array(list(source.bearings.values())), np.full(16, 0.8))
+    plain = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", 6), truth, source)]
+    carved_late = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", 6), truth, near)]
+    switched_off = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", 6, near_field=False), truth, near)]
+    assert switched_off == plain
+    assert all(a >= b - 1e-9 for a, b in zip(carved_late, plain)) and sum(carved_late) > sum(plain)

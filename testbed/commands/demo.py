@@ -29,6 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from testbed.topview import TopView
 
     ns = argparse.Namespace(scene="lab", tasker="incremental", k=6, m=1, update_every=1, feedback="hull",
+                            near_field=True,
                             frames=args.frames, people=3, params=None, seed=args.seed, video=None)
     scene, config, params, truth, rng = prepare(ns)     # checks the arguments
     out = Path(args.out)

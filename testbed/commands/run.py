@@ -31,6 +31,9 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--update-every", type=int, default=1, metavar="U", help="re-task every U frames (default 1)")
     p.add_argument("--feedback", default="hull", choices=("hull", "tracks"),
                    help="object estimates for tasking: previous hull centres (paper) or tracks")
+    p.add_argument("--no-near-field", dest="near_field", action="store_false",
+                   help="carve the hull from each camera's centre, as the paper's cameras, not only beyond its "
+                        "blind radius (a person close to a camera, below its image, can then fall outside it)")
     p.add_argument("--frames", type=int, default=30, help="frames to run (default 30, 4 s at 7.5 Hz)")
     p.add_argument("--people", type=int, default=None, help="people in the room (default: the scene's)")
     p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default: built-in)")
@@ -56,7 +59,7 @@ def prepare(args):
     if scene.people.count == 0:
         option = "--people" if args.people is not None else f"people.count of {args.scene}"
         raise ValueError(f"{option}: expected at least 1 person to track, got 0")
-    config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback).check(
+    config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback, args.near_field).check(
         len(scene.cameras), as_options=True)
     params = load_params(args.params)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
@@ -108,7 +111,7 @@ def execute(scene, config, params, truth, sensor_rng, video=None):
             writer.close(ok=ok)
     summary = summarise(results, scene)
     summary.update(tasker=config.tasker, k=config.k, m=config.m, update_every=config.update_every,
-                   people=scene.people.count, scene=scene.name)
+                   near_field=config.near_field, people=scene.people.count, scene=scene.name)
     return results, summary, source.bearings
 
 

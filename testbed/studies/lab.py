@@ -28,6 +28,8 @@ def add_arguments(p) -> None:
     p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
     p.add_argument("--update-every", type=int, default=1, help="incremental re-tasking period (default 1)")
     p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default: built-in)")
+    p.add_argument("--no-near-field", dest="near_field", action="store_false",
+                   help="carve the hulls from each camera's centre, not only beyond its blind radius")
 
 
 def parse(args) -> dict:
@@ -48,7 +50,8 @@ def parse(args) -> dict:
     if args.m > min(ks):
         raise ValueError(f"--m: expected at most the smallest k = {min(ks)}, got {args.m}")
     return {"scene": args.scene, "people": args.people, "k": ks, "taskers": taskers,
-            "frames": args.frames, "m": args.m, "update_every": args.update_every, "params": args.params}
+            "frames": args.frames, "m": args.m, "update_every": args.update_every, "params": args.params,
+            "near_field": args.near_field}
 
 
 def render_scanlines(scene, params, truth: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -76,11 +79,12 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
     scans, bearings, near = render_scanlines(scene, load_params(opts["params"]), truth, sensor_rng)
     source = PrecomputedSource(scans, bearings, near)
     n = len(scene.cameras)
-    full = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", n), truth, source)]
+    near_field = opts.get("near_field", True)
+    full = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", n, near_field=near_field), truth, source)]
     areas = {}
     for tasker in opts["taskers"]:
         for k in opts["k"]:
-            config = LoopConfig(tasker, k, opts["m"], opts["update_every"])
+            config = LoopConfig(tasker, k, opts["m"], opts["update_every"], near_field=near_field)
             areas[f"{tasker}:{k}"] = float(np.mean([r.hull_area for r in run_loop(scene, config, truth, source)]))
     return {"areas": areas, "min_full": float(np.min(full)), "mean_full": float(np.mean(full))}
 
