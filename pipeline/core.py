@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from .foreground import AngleTerms, background_model, check_frames, open_stacked
-from .nearfield import blind_radius
+from .nearfield import sight_range
 from .params import PipelineParams
 from .rectify import Rectifier
 from .scanline import median_threshold, spatial_smooth, temporal_smooth, true_scanlines
@@ -77,17 +77,21 @@ class Pipeline:
         """(n_cams, width) float, radians, world-frame bearing of each scanline column."""
         return self.rectifier.bearings
 
-    def blind_radius(self, object_height: float, truth: bool = False) -> np.ndarray:
-        """(n_cams,) float, metres: per camera, how close to it an upright object of
-        ``object_height`` metres can stand and still be sent as empty
-        (:func:`pipeline.nearfield.blind_radius`). A column is sent occupied when its
+    def sight_range(self, object_height: float, truth: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Per camera, the floor distances (metres) between which an upright object of
+        ``object_height`` metres is sent as occupied: ``(near, far)``, each (n_cams,)
+        (:func:`pipeline.nearfield.sight_range`). A column is sent occupied when its
         smoothed count exceeds ``column_threshold``: a new object must show
         ``column_threshold / temporal_alpha`` rows, plus the opening's ``opening_kernel``;
         with ``truth``, for the true scanlines (:meth:`ground_truth`), one row.
         """
         p = self.params
         margin = 1.0 if truth else p.column_threshold / p.temporal_alpha + p.opening_kernel
-        return blind_radius(self.cameras, object_height, margin, self.rectifier.width)
+        return sight_range(self.cameras, object_height, margin, self.rectifier.width)
+
+    def blind_radius(self, object_height: float, truth: bool = False) -> np.ndarray:
+        """(n_cams,) float, metres: the ``near`` of :meth:`sight_range`."""
+        return self.sight_range(object_height, truth)[0]
 
     @property
     def frame_shape(self) -> tuple[int, int, int]:

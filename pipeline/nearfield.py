@@ -1,88 +1,126 @@
-"""How close to a camera an object can stand and not be sent: the near field.
+"""Where a camera can see an object at all: the blind radius and the sight radius.
 
-A camera pitched down does not see the floor at its feet. An upright object of height
-``h`` standing at floor distance ``d`` from a camera at height ``H > h`` shows, in the
-scanline column of its bearing, the rows from its top (on the level virtual camera of
-:mod:`pipeline.rectify`, ``y = (H - h) / (d cos a)`` for a column at angle ``a`` off the
-optical axis) down to the raw image's lower edge. Closer than some distance it shows
-fewer rows than the scanline needs, or none: the camera sends "empty" there although an
-object may stand in it. The **blind radius** is the largest such distance over the
-camera's columns; tasking carves a camera's free wedges only beyond it
-(:func:`tasking.visual_hull_of_scanlines` with ``near``), so that the hull keeps every
-object near a camera too.
+A camera pitched down does not see the floor at its feet, and one pitched steeply down
+(or up) does not see far away. An upright object of height ``h`` standing on the floor at
+distance ``d`` from a camera at height ``H`` spans, in the scanline column of its
+bearing (a column at ``x`` on the level virtual camera of :mod:`pipeline.rectify`,
+``s = sqrt(1 + x^2)``), the virtual image heights ``y`` from ``(H - h) s / d`` (its top)
+to ``H s / d`` (its foot); the raw image covers ``y`` from its upper edge ``Yt`` to its
+lower edge ``Yb`` in that column (undistorted into the level frame). With ``u = 1 / d``
+the rows the object shows there,
 
-The object stands on the floor (z = 0, world frame) and its top is what is seen first
-from above (the lab's people are cylinders with a flat top, whose top disc is drawn): a
-floor point of the object at distance ``d`` beyond the blind radius has the object's
-top above it in view, with at least ``margin`` rows of the object below it in that
-column. A camera no higher than the object sees the object at its own height, on the
-horizon: radius 0. A camera whose lower image edge is above the horizon in some column
-never sees a low object there: radius ``inf`` (it proves nothing empty).
+    f (min(H s u, Yb) - max((H - h) s u, Yt)) = f min((h s) u, H s u - Yt, Yb - (H - h) s u, Yb - Yt),
+
+are a concave function of ``u``, so the distances at which it shows at least ``margin``
+rows form one interval ``[near, far]``, in closed form:
+
+* ``(h s) u >= m``: ``d <= h s / m`` (far away the object is too small),
+* ``H s u - Yt >= m``: ``d <= H s / (Yt + m)`` when ``Yt + m > 0`` (its foot above the image),
+* ``Yb - (H - h) s u >= m``: ``d >= (H - h) s / (Yb - m)`` for a camera above the object's
+  top (its top below the image: the near field); ``d <= (h - H) s / (m - Yb)`` for one
+  below it whose lower edge is above the horizon,
+
+with ``m = margin / f``. Closer than the **blind radius** (the largest ``near`` over the
+columns) or farther than the **sight radius** (the smallest ``far``) the camera can send
+"empty" although an object stands there; tasking carves its free wedges only between
+the two (:func:`tasking.visual_hull_of_scanlines` with ``near`` and ``far``), so that the
+hull keeps every object. A camera that sees no such distance has ``near = inf``.
+
+The object's top is what is seen first from above (the lab's people are cylinders with
+a flat top, whose top disc is drawn), and any floor point of it has its own vertical
+segment inside it: the rows counted are a lower bound of what its column shows.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from scene.checks import check_positive
+
 from .rectify import level_cameras, level_points
 
-__all__ = ["blind_radius", "lower_edge"]
+__all__ = ["blind_radius", "image_edge", "sight_range"]
 
-#: Points sampled along the raw image's lower edge.
+#: Points sampled along the raw image's upper and lower edges.
 EDGE_POINTS = 129
 
 
-def lower_edge(camera, K_virtual: np.ndarray, width: int) -> np.ndarray:
-    """The raw image's lower edge on the level virtual camera, per output column.
+def image_edge(camera, K_virtual: np.ndarray, width: int, lower: bool = True) -> np.ndarray:
+    """The raw image's lower (or upper) edge on the level virtual camera, per output column.
 
     Returns (width,) float: the virtual image y (z = 1 plane, y down) of the outer edge of
-    the raw image's last row of pixels, at each output column's x. Columns are those of
-    :func:`pipeline.rectify.virtual_camera_matrix`, all of which the raw image covers
-    from top to bottom.
+    the raw image's last (first) row of pixels, at each output column's x. Columns are
+    those of :func:`pipeline.rectify.virtual_camera_matrix`, all of which the raw image
+    covers from top to bottom.
     """
     us = np.linspace(-0.5, camera.width - 0.5, EDGE_POINTS)
-    x, y = level_points(camera, np.stack([us, np.full_like(us, camera.height - 0.5)], 1))
+    v = camera.height - 0.5 if lower else -0.5
+    x, y = level_points(camera, np.stack([us, np.full_like(us, v)], 1))
     order = np.argsort(x)
     columns = (np.arange(width) - K_virtual[0, 2]) / K_virtual[0, 0]
     return np.interp(columns, x[order], y[order])
 
 
-def blind_radius(cameras, object_height: float, margin: float = 1.0, width: int | None = None) -> np.ndarray:
-    """Per camera, the floor distance (metres) within which an upright object of
-    ``object_height`` metres can show fewer than ``margin`` rows of the rectified image in
-    its column.
+def sight_range(cameras, object_height: float, margin: float = 1.0,
+                width: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Per camera, the floor distances (metres) between which an upright object of
+    ``object_height`` metres shows at least ``margin`` rows of the rectified image in
+    every column: ``(near, far)``, the blind and the sight radius.
 
     cameras : sequence of :class:`scene.Camera` (world frame: floor at z = 0)
     object_height : metres, > 0
     margin : rows (pixels of the level virtual camera, :class:`pipeline.Rectifier`'s
-        output) the object must show below its top to be sent: 1 for true masks,
-        more for the pipeline's threshold (:meth:`pipeline.Pipeline.blind_radius`)
+        output) the object must show to be sent: 1 for true masks, more for the
+        pipeline's threshold (:meth:`pipeline.Pipeline.sight_range`)
     width : output width of the rectification (default the cameras')
 
-    Returns (n_cams,) float, metres; 0 for a camera no higher than the object, ``inf``
-    where the object is never seen.
+    Returns two (n_cams,) float arrays, metres: ``near`` (0 for a camera no higher than
+    the object that sees the horizon; ``inf`` where the object is never seen) and
+    ``far`` (``inf`` where no limit applies).
 
     >>> from scene import load_scene
-    >>> cams = load_scene("lab").cameras[:1]          # 2.2 m high, pitched 15 degrees down
-    >>> blind_radius(cams, 1.75).round(2).tolist()     # the top of a 1.75 m person
-    [0.71]
+    >>> near, far = sight_range(load_scene("lab").cameras[:1], 1.75)   # 2.2 m high, 15 deg down
+    >>> near.round(2).tolist(), far.round().tolist()   # far: where a person is one row tall
+    ([0.71], [1224.0])
     """
-    if not (np.isfinite(object_height) and object_height > 0):
-        raise ValueError(f"object_height: expected a positive number of metres, got {object_height}")
+    object_height = check_positive("object_height", object_height)
+    margin = float(margin)
     if not (np.isfinite(margin) and margin >= 0):
         raise ValueError(f"margin: expected a number of rows >= 0, got {margin}")
     cameras = tuple(cameras)
     Ks, _, width = level_cameras(cameras, width)
-    out = np.zeros(len(cameras))
+    near, far = np.zeros(len(cameras)), np.full(len(cameras), np.inf)
     for i, (camera, K) in enumerate(zip(cameras, Ks)):
-        drop = float(camera.center_world[2]) - object_height         # camera above the object's top
-        if drop <= 0:
+        H = float(camera.center_world[2])
+        if H <= 0:                                      # at or below the floor: sees no object on it
+            near[i] = np.inf
             continue
-        columns = (np.arange(width) - K[0, 2]) / K[0, 0]
-        lowest = lower_edge(camera, K, width) - margin / K[1, 1]       # lowest y with `margin` rows below
-        if np.any(lowest <= 0):
-            out[i] = np.inf
-            continue
-        # the top at floor distance d along a column at x: depth d / sqrt(1 + x^2), y = drop / depth
-        out[i] = float(np.max(drop * np.sqrt(1.0 + columns**2) / lowest))
-    return out
+        s = np.sqrt(1.0 + ((np.arange(width) - K[0, 2]) / K[0, 0]) ** 2)
+        m = margin / K[1, 1]
+        Yb, Yt = image_edge(camera, K, width), image_edge(camera, K, width, lower=False)
+        top = (H - object_height) * s                  # the top's y times d
+        lo = np.zeros(width)
+        hi = np.full(width, np.inf)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if m > 0:
+                hi = np.minimum(hi, object_height * s / m)
+            hi = np.where(Yt + m > 0, np.minimum(hi, H * s / (Yt + m)), hi)
+            room = Yb - m                               # how far below the horizon `margin` rows end
+            above = top > 0
+            lo = np.where(above & (room > 0), top / room, lo)
+            lo = np.where(above & (room <= 0), np.inf, lo)
+            hi = np.where(~above & (room < 0), np.minimum(hi, np.where(top < 0, -top / -room, 0.0)), hi)
+        near[i], far[i] = float(np.max(lo)), float(np.min(hi))
+        if near[i] >= far[i]:
+            near[i], far[i] = np.inf, np.inf
+    return near, far
+
+
+def blind_radius(cameras, object_height: float, margin: float = 1.0, width: int | None = None) -> np.ndarray:
+    """The ``near`` of :func:`sight_range`: (n_cams,) float, metres.
+
+    >>> from scene import load_scene
+    >>> blind_radius(load_scene("lab").cameras[:1], 1.75).round(2).tolist()
+    [0.71]
+    """
+    return sight_range(cameras, object_height, margin, width)[0]

@@ -97,16 +97,16 @@ def check_radii(name: str, radii, m: int) -> np.ndarray:
     return arr
 
 
-def check_near(near, n: int) -> np.ndarray:
-    """Broadcast blind radii ``near`` (scalar or ``(n,)``, metres) to ``(n,)``, all >= 0 (``inf``
-    allowed: a camera that proves nothing empty)."""
-    arr = np.asarray(near, dtype=float)
+def check_near(name: str, radii, n: int) -> np.ndarray:
+    """Broadcast a camera's blind or sight radii ``radii`` (scalar or ``(n,)``, metres) to
+    ``(n,)``, all >= 0 (``inf`` allowed)."""
+    arr = np.asarray(radii, dtype=float)
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     if arr.shape != (n,):
-        raise ValueError(f"near must be a scalar or have shape ({n},); got shape {arr.shape}")
+        raise ValueError(f"{name} must be a scalar or have shape ({n},); got shape {arr.shape}")
     if np.any(np.isnan(arr)) or np.any(arr < 0):
-        raise ValueError("near must be >= 0 metres (inf allowed), not NaN")
+        raise ValueError(f"{name} must be >= 0 metres (inf allowed), not NaN")
     return arr
 
 

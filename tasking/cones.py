@@ -193,7 +193,7 @@ def wedge_radius(room: BaseGeometry, camera_xy: np.ndarray) -> float:
     return 2.0 * float(np.hypot(x1 - x0, y1 - y0)) + 1.0
 
 
-def wedge_polygons(apex, theta0, theta1, radius: float, inner=None) -> np.ndarray:
+def wedge_polygons(apex, theta0, theta1, radius: float, inner=None, outer=None) -> np.ndarray:
     """Forward wedges from ``apex`` between world-frame angles ``theta0 < theta1``.
 
     Parameters
@@ -201,11 +201,13 @@ def wedge_polygons(apex, theta0, theta1, radius: float, inner=None) -> np.ndarra
     apex : (q, 2) float, metres, world frame
     theta0, theta1 : (q,) float, radians, world frame, ``0 < theta1 - theta0 < 2*pi``
     radius : float, metres
-    inner : optional (q,) float, metres, ``0 <= inner < radius cos(s/2)^2`` for the arc
-        step ``s = (theta1 - theta0) / (ARC_POINTS - 1)``: cut every
-        wedge to the part beyond ``inner`` from the apex (a camera's near field,
+    inner : optional (q,) float, metres, ``0 <= inner < outer cos(s/2)^2`` for the arc
+        step ``s = (theta1 - theta0) / (ARC_POINTS - 1)``: cut every wedge to the part
+        beyond ``inner`` from the apex (a camera's blind radius,
         :mod:`pipeline.nearfield`). The inner arc's chords pass outside the circle of
         radius ``inner``, so the whole disc stays outside the wedge.
+    outer : optional (q,) float, metres: end every wedge at ``min(outer, radius)`` (a
+        camera's sight radius); the far arc's chords pass inside that circle.
 
     Returns
     -------
@@ -217,11 +219,12 @@ def wedge_polygons(apex, theta0, theta1, radius: float, inner=None) -> np.ndarra
     q = apex.shape[0]
     if q == 0:
         return np.empty(0, dtype=object)
+    far = np.full(q, float(radius)) if outer is None else np.minimum(np.asarray(outer, float), radius)
     if inner is None:
         coords = np.empty((q, ARC_POINTS + 2, 2))
         coords[:, 0] = apex
         coords[:, -1] = apex
-        outer = coords[:, 1:-1]
+        arc = coords[:, 1:-1]
     else:
         coords = np.empty((q, 2 * ARC_POINTS + 1, 2))
         half_step = 0.5 * (theta1 - theta0) / (ARC_POINTS - 1)
@@ -229,11 +232,11 @@ def wedge_polygons(apex, theta0, theta1, radius: float, inner=None) -> np.ndarra
         back = ang[:, ::-1]
         coords[:, ARC_POINTS:-1, 0] = apex[:, :1] + r[:, None] * np.cos(back)
         coords[:, ARC_POINTS:-1, 1] = apex[:, 1:] + r[:, None] * np.sin(back)
-        outer = coords[:, :ARC_POINTS]
-    outer[..., 0] = apex[:, :1] + radius * np.cos(ang)
-    outer[..., 1] = apex[:, 1:] + radius * np.sin(ang)
+        arc = coords[:, :ARC_POINTS]
+    arc[..., 0] = apex[:, :1] + far[:, None] * np.cos(ang)
+    arc[..., 1] = apex[:, 1:] + far[:, None] * np.sin(ang)
     if inner is not None:
-        coords[:, -1] = coords[:, 0]                                # closed on the outer arc's start
+        coords[:, -1] = coords[:, 0]                                # closed on the far arc's start
     return np.atleast_1d(shapely.polygons(coords))
 
 

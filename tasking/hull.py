@@ -110,7 +110,7 @@ def free_wedges_from_discs(
     return (wedges, table) if return_cones else wedges
 
 
-def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near=None) -> np.ndarray:
+def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near=None, far=None) -> np.ndarray:
     """Per-camera union of free wedges (not clipped to the room), from scanlines.
 
     Parameters
@@ -121,9 +121,12 @@ def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near=None) 
     scanlines : (n, W) bool, True = occupied column
     room : shapely Polygon
     near : optional float or (n,) float, metres, >= 0 (``inf`` allowed): each camera's
-        blind radius (:meth:`pipeline.Pipeline.blind_radius`); its free wedges start
+        blind radius (:meth:`pipeline.Pipeline.sight_range`); its free wedges start
         that far from it, since an object closer may be below its image. None: from
         the camera centre, as for the paper's cameras.
+    far : optional float or (n,) float, metres, > 0 (``inf`` allowed): each camera's sight
+        radius; its free wedges end there, since an object farther may be outside its
+        image or too small to be sent. None: they reach past the room.
 
     Returns
     -------
@@ -150,26 +153,32 @@ def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near=None) 
         bad = int(np.flatnonzero(~monotone)[0])
         raise ValueError(f"bearings must be strictly monotone along each row (row {bad})")
     if near is not None:
-        near = check_near(near, n)
+        near = check_near("near", near, n)
+    if far is not None:
+        far = check_near("far", far, n)
     yaw, fov, lo, hi = cones.scanline_intervals(bearings, scanlines)
     if np.any(fov >= 2 * np.pi):
         raise ValueError("bearings: the columns of a camera must span less than 2*pi")
-    return _wedges(camera_xy, yaw, 0.5 * fov, lo, hi, room, near=near)[0]
+    return _wedges(camera_xy, yaw, 0.5 * fov, lo, hi, room, near=near, far=far)[0]
 
 
-def _wedges(camera_xy, yaw, half, lo, hi, room, polygons: bool = True, near=None):
+def _wedges(camera_xy, yaw, half, lo, hi, room, polygons: bool = True, near=None, far=None):
     camera, a0, a1 = cones.free_intervals(lo, hi, half)
     theta0, theta1 = yaw[camera] + a0, yaw[camera] + a1
     table = (camera, camera_xy[camera], theta0, theta1)
     if not polygons:
         return None, table
     radius = cones.wedge_radius(room, camera_xy)
-    inner = None
-    if near is not None and np.any(near > 0):
-        inner = near[camera]
-        keep = inner < radius * np.cos(0.5 * (theta1 - theta0) / (cones.ARC_POINTS - 1)) ** 2   # inside the arc's chords
-        camera, theta0, theta1, inner = camera[keep], theta0[keep], theta1[keep], inner[keep]
-    polys = cones.wedge_polygons(camera_xy[camera], theta0, theta1, radius, inner)
+    inner = near[camera] if near is not None and np.any(near > 0) else None
+    outer = far[camera] if far is not None and np.any(far < radius) else None
+    if inner is not None or outer is not None:
+        reach = radius if outer is None else np.minimum(outer, radius)
+        start = 0.0 if inner is None else inner
+        keep = start < reach * np.cos(0.5 * (theta1 - theta0) / (cones.ARC_POINTS - 1)) ** 2   # inside the chords
+        camera, theta0, theta1 = camera[keep], theta0[keep], theta1[keep]
+        inner = None if inner is None else inner[keep]
+        outer = None if outer is None else outer[keep]
+    polys = cones.wedge_polygons(camera_xy[camera], theta0, theta1, radius, inner, outer)
     return cones.group_by_camera(polys, camera, camera_xy.shape[0]), table
 
 
@@ -255,10 +264,10 @@ def empty_regions_from_discs(camera_xy, camera_yaw, fov, centers, radii, room) -
     return list(shapely.intersection(w, room))
 
 
-def empty_regions_from_scanlines(camera_xy, bearings, scanlines, room, near=None) -> list:
-    """Per-camera region proven empty, from scanlines (``near`` as in
+def empty_regions_from_scanlines(camera_xy, bearings, scanlines, room, near=None, far=None) -> list:
+    """Per-camera region proven empty, from scanlines (``near`` and ``far`` as in
     :func:`free_wedges_from_scanlines`); a list of n geometries."""
-    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near)
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near, far)
     return list(shapely.intersection(w, room))
 
 
@@ -272,10 +281,10 @@ def camera_regions_from_discs(camera_xy, camera_yaw, fov, centers, radii, room) 
     return [drop_slivers(g, room) for g in shapely.difference(room, w)]
 
 
-def camera_regions_from_scanlines(camera_xy, bearings, scanlines, room, near=None) -> list:
-    """Per-camera "not proven empty" regions, from scanlines (``near`` as in
+def camera_regions_from_scanlines(camera_xy, bearings, scanlines, room, near=None, far=None) -> list:
+    """Per-camera "not proven empty" regions, from scanlines (``near`` and ``far`` as in
     :func:`free_wedges_from_scanlines`); a list of n geometries."""
-    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near)
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near, far)
     return [drop_slivers(g, room) for g in shapely.difference(room, w)]
 
 
@@ -299,7 +308,7 @@ def visual_hull_of_discs(camera_xy, camera_yaw, fov, centers, radii, room) -> Ba
     return hull_from_wedges(w, room)
 
 
-def visual_hull_of_scanlines(camera_xy, bearings, scanlines, room, near=None) -> BaseGeometry:
+def visual_hull_of_scanlines(camera_xy, bearings, scanlines, room, near=None, far=None) -> BaseGeometry:
     """Visual hull from binary scanlines.
 
     Parameters
@@ -310,14 +319,15 @@ def visual_hull_of_scanlines(camera_xy, bearings, scanlines, room, near=None) ->
         either side, so the field of view is the span of the column edges
     scanlines : (n, W) bool, True = occupied column
     room : shapely Polygon
-    near : optional float or (n,) float, metres: each camera's blind radius, within
-        which it proves nothing empty (:func:`free_wedges_from_scanlines`)
+    near, far : optional float or (n,) float, metres: each camera's blind and sight
+        radius; it proves empty only what lies between them
+        (:func:`free_wedges_from_scanlines`)
 
     Returns
     -------
     shapely geometry, the hull before small-polygon removal.
     """
-    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near)
+    w = free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near, far)
     return hull_from_wedges(w, room)
 
 

@@ -323,8 +323,8 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     by_number = {c.number: k for k, c in enumerate(scene.cameras)}
     camera_xy = xy_all[[by_number[n] for n in numbers]]
     room = scene.room.polygon
-    near = pipe.blind_radius(people.height)                  # metres: the pipeline's scanlines
-    gt_near = pipe.blind_radius(people.height, truth=True)   # the true ones
+    near, far = pipe.sight_range(people.height)                      # metres: the pipeline's scanlines
+    gt_near, gt_far = pipe.sight_range(people.height, truth=True)    # the true ones
 
     name = episode_name(index)
     tmp = temp_folder(out, f".{name}.")
@@ -362,7 +362,7 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
             scans.append(scan)
             gts.append(gt)
             t4 = time.perf_counter()
-            hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room, gt_near)))
+            hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room, gt_near, gt_far)))
             for pid, (x, y) in enumerate(np.asarray(track[f], float)):
                 rows.append((f, pid, repr(float(x)), repr(float(y)), people.radius, people.height))
             for key, dt in (("write", t3 - t2), ("pipeline", t4 - t3), ("hull", time.perf_counter() - t4)):
@@ -405,10 +405,10 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
             w.writerows(rows)
         save_npz_exact(tmp / "scanlines.npz", scanlines=np.stack(scans), gt_scanlines=np.stack(gts),
                        bearings=pipe.bearings, camera_numbers=np.array(numbers),
-                       blind_radius=near, gt_blind_radius=gt_near)
+                       blind_radius=near, sight_radius=far, gt_blind_radius=gt_near, gt_sight_radius=gt_far)
         params.to_yaml(tmp / "pipeline.yaml")
         (tmp / "gt_hull.json").write_text(json.dumps(
-            {"units": "metres, world frame", "source": "ground-truth scanlines of all cameras of the episode, beyond their blind radii",
+            {"units": "metres, world frame", "source": "ground-truth scanlines of all cameras of the episode, between their blind and sight radii",
              "cameras": numbers, "frames": hulls}, separators=(",", ":")) + "\n")
         source = config.scene
         meta = {

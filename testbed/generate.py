@@ -310,7 +310,8 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
             listed = old.get("episodes", [])
             layout = int(old.get("episode_layout", 1))
             if listed and layout != EPISODE_LAYOUT:
-                raise ValueError(f"--resume: the episodes in {out} are of layout {layout} (an earlier camtask), this "
+                which = "an earlier" if layout < EPISODE_LAYOUT else "a later"
+                raise ValueError(f"--resume: the episodes in {out} are of layout {layout} ({which} camtask), this "
                                  f"camtask writes layout {EPISODE_LAYOUT} (docs/dataset.md); finish the run with the "
                                  "camtask that started it, or use --overwrite to start again")
             total = sum(len(e["files"]) for e in listed)

@@ -44,9 +44,10 @@ class LoopConfig:
     update_every : re-task every this many frames (1 = every frame)
     feedback : "hull" (the paper: previous hull's polygon centres) or "tracks" (the
         tracker's confirmed, temporally supported estimates, falling back to the hull)
-    near_field : each camera carves the hull only beyond its blind radius (the source's
-        ``near``, docs/pipeline.md), so that the hull keeps a person standing below its
-        image; False: from the camera centre, as the paper's cameras
+    near_field : each camera carves the hull only between its blind and sight radius
+        (the source's ``near`` and ``far``, docs/pipeline.md), so that the hull keeps a
+        person standing below (or beyond) its image; False: from the camera centre out,
+        as the paper's cameras
     """
 
     tasker: str = "incremental"
@@ -135,8 +136,9 @@ class LiveSource:
         self.pipes = {cam.number: Pipeline([cam], params, background=background[i:i + 1])
                       for i, cam in enumerate(scene.cameras)}
         self.bearings = {n: p.bearings[0] for n, p in self.pipes.items()}
-        height = scene.people.height
-        self.near = {n: float(p.blind_radius(height)[0]) for n, p in self.pipes.items()}   # metres
+        ranges = {n: p.sight_range(scene.people.height) for n, p in self.pipes.items()}
+        self.near = {n: float(r[0][0]) for n, r in ranges.items()}   # blind radius, metres
+        self.far = {n: float(r[1][0]) for n, r in ranges.items()}    # sight radius, metres
         self.rng = rng
         self.keep_frames = keep_frames
         self._on: set[int] = set()
@@ -164,15 +166,17 @@ class LiveSource:
 class PrecomputedSource:
     """Scanlines computed beforehand for every camera: (frames, n_cams, W) bool.
 
-    bearings : (n_cams, W) float, radians; near : optional (n_cams,) float, metres, each
-    camera's blind radius (:meth:`pipeline.Pipeline.blind_radius`), default 0
+    bearings : (n_cams, W) float, radians; near, far : optional (n_cams,) float, metres,
+    each camera's blind and sight radius (:meth:`pipeline.Pipeline.sight_range`), default
+    0 and inf
     """
 
-    def __init__(self, scanlines: np.ndarray, bearings: np.ndarray, near=None):
+    def __init__(self, scanlines: np.ndarray, bearings: np.ndarray, near=None, far=None):
         self.all = np.asarray(scanlines, bool)
         self.bearings = {i + 1: b for i, b in enumerate(np.asarray(bearings, float))}
-        near = np.zeros(len(self.bearings)) if near is None else np.asarray(near, float)
-        self.near = {i + 1: float(r) for i, r in enumerate(near)}
+        n = len(self.bearings)
+        self.near = dict(enumerate(np.zeros(n) if near is None else np.asarray(near, float).tolist(), 1))
+        self.far = dict(enumerate(np.full(n, np.inf) if far is None else np.asarray(far, float).tolist(), 1))
 
     def scanlines(self, index: int, positions_xy, numbers: tuple[int, ...]):
         return self.all[index, np.asarray(numbers) - 1], None
@@ -216,7 +220,8 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
         t0 = time.perf_counter()
         bearings = np.array([source.bearings[n] for n in numbers])
         near = np.array([source.near[n] for n in numbers]) if config.near_field else None
-        hull = visual_hull_of_scanlines(xy[tasked], bearings, scan, scene.room.polygon, near)
+        far = np.array([source.far[n] for n in numbers]) if config.near_field else None
+        hull = visual_hull_of_scanlines(xy[tasked], bearings, scan, scene.room.polygon, near, far)
         polygons = prune_small(hull, object_area)
         centres = polygon_centres(polygons)
         t1 = time.perf_counter()

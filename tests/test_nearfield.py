@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, box
 
-from pipeline import Pipeline, blind_radius, load_params
+from pipeline import Pipeline, blind_radius, load_params, sight_range
 from pipeline.rectify import level_cameras
 from scene import Camera
 from tasking import free_wedges_from_scanlines, visual_hull_of_scanlines
@@ -164,3 +164,69 @@ def test_hulls_keep_people_who_stand_close_to_a_camera(lab, lab_renderer):
         hull = visual_hull_of_scanlines(xy, pipe.bearings, gt, room, gt_near)
         assert max(d.difference(hull).area for d in discs) < 5e-5           # column quantisation
     assert max(cleared_without) > 5e-3
+
+
+# --- the far field ------------------------------------------------------------------------
+
+def projected_sight_distance(camera: Camera, top: float, step: float = 2e-3) -> float:
+    """Smallest, over the band's columns, largest floor distance at which some point of the
+    segment from the floor to ``top`` projects (cv2.projectPoints, no distortion) inside
+    the raw image's rows."""
+    from pipeline.rectify import column_bearings
+
+    Ks, _, width = level_cameras([camera])
+    bearings = column_bearings(camera, Ks[0], width)[::16]
+    d = np.arange(step, 15.0, step)
+    z = np.linspace(0.0, top, 60)
+    c = camera.center_world
+    pts = np.stack(np.broadcast_arrays(c[0] + d[None, :, None] * np.cos(bearings)[:, None, None],
+                                       c[1] + d[None, :, None] * np.sin(bearings)[:, None, None],
+                                       z[None, None, :]), -1).reshape(-1, 1, 3)
+    rvec = cv2.Rodrigues(camera.R)[0]
+    v = cv2.projectPoints(pts, rvec, camera.t, camera.K, camera.dist)[0][..., 1].reshape(bearings.size, d.size, z.size)
+    seen = ((v >= -0.5) & (v <= camera.height - 0.5)).any(axis=2)        # (bearings, d)
+    return float(min(d[np.flatnonzero(row)].max() for row in seen))
+
+
+@pytest.mark.parametrize("height_m, pitch_deg", [(2.2, 40.0), (3.0, 55.0)])
+def test_sight_radius_is_where_the_object_leaves_the_top_of_the_image(height_m, pitch_deg):
+    camera = pinhole(height_m, pitch_deg)
+    expected = projected_sight_distance(camera, 1.75)
+    near, far = sight_range([camera], 1.75, margin=0.0)
+    assert far[0] == pytest.approx(expected, abs=5e-3)       # the 2 mm grid, every 16th column
+    assert near[0] < far[0]
+
+
+def test_a_low_camera_pitched_up_sees_people_only_up_to_a_distance():
+    """1 m high, 40 degrees up: its lower edge is above the horizon, so a 1.75 m person's top
+    drops below the image with distance (blind radius 0, sight radius ~2 m)."""
+    camera = pinhole(1.0, -40.0)
+    near, far = sight_range([camera], 1.75, margin=0.0)
+    assert near[0] == 0.0 and 1.0 < far[0] < 3.0
+    assert far[0] == pytest.approx(projected_sight_distance(camera, 1.75), abs=4e-3)
+
+
+@pytest.mark.render
+def test_hulls_keep_people_beyond_what_steep_cameras_see(lab):
+    """The lab with every camera pitched 40 degrees down: people farther than ~5.8 m from a
+    camera are above its image. Between the blind and sight radii the true scanlines' hull
+    keeps everyone; with the blind radius alone it loses whole people."""
+    from render import Renderer
+    from scene import Scene
+    from scene.config import read_scene_text, scene_path
+
+    steep = Scene.from_text(read_scene_text(scene_path("lab")).replace("pitch_deg: 15.0", "pitch_deg: 40.0"), "steep")
+    people = np.array([[1.0, 1.0], [5.5, 4.5], [3.4, 2.9]])
+    with Renderer(steep) as renderer:
+        pipe = Pipeline(steep.cameras, load_params(), background=renderer.background().rgb)
+        frame = renderer.render(people, rng=np.random.default_rng(0))
+    _, gt = pipe.ground_truth(frame.labels)
+    xy, _, _ = steep.floor_poses()
+    near, far = pipe.sight_range(steep.people.height, truth=True)
+    assert np.all(far < 6.0) and np.all(near < 0.5)
+    discs = [Point(p).buffer(steep.people.radius, quad_segs=64) for p in people]
+    room = steep.room.polygon
+    hull = visual_hull_of_scanlines(xy, pipe.bearings, gt, room, near, far)
+    assert max(d.difference(hull).area for d in discs) < 5e-5
+    near_only = visual_hull_of_scanlines(xy, pipe.bearings, gt, room, near)
+    assert max(d.difference(near_only).area for d in discs) > 0.1

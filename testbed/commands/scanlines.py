@@ -74,16 +74,35 @@ def _run_render(args, params) -> int:
         result = run_sequence(pipe, (render.frames(i) for i in range(n)),
                               (render.labels(i) for i in range(n)), progress=lambda: bar.update())
     radii = {}
-    if (render.root / "people.csv").is_file():      # the people's height: how close to a camera they go unseen
-        from testbed.dataset import read_people
-
-        height = float(np.min(np.atleast_1d(read_people(render.root / "people.csv")["height"])))
-        radii = {"blind_radius": pipe.blind_radius(height), "gt_blind_radius": pipe.blind_radius(height, truth=True)}
+    height = people_height(render.root)
+    if height is not None:                          # where the cameras can see people at all
+        (near, far), (gt_near, gt_far) = pipe.sight_range(height), pipe.sight_range(height, truth=True)
+        radii = {"blind_radius": near, "sight_radius": far, "gt_blind_radius": gt_near, "gt_sight_radius": gt_far}
     save_npz_atomic(out, scanlines=result.scanlines, gt_scanlines=result.gt_scanlines,
                     bearings=result.bearings, camera_numbers=np.array([c.number for c in render.cameras]), **radii)
     metrics = result.metrics() | {"params": params.to_dict(), "out": str(out)}
     _report(metrics, [c.number for c in render.cameras], args.json)
     return 0
+
+
+def people_height(root: Path) -> float | None:
+    """The height (metres) of the shortest person of a render directory: from its
+    people.csv, else (no one walked) from its meta.json's scene; None without either."""
+    from testbed.dataset import read_people
+
+    if (root / "people.csv").is_file():
+        heights = np.atleast_1d(read_people(root / "people.csv")["height"])
+        if heights.size:
+            return float(np.min(heights))
+    if (root / "meta.json").is_file():
+        import json
+
+        from scene import Scene
+
+        meta = json.loads((root / "meta.json").read_text())
+        if meta.get("scene_yaml"):
+            return float(Scene.from_text(meta["scene_yaml"], str(root / "meta.json")).people.height)
+    return None
 
 
 def episode_dir(root: Path) -> Path:

@@ -54,16 +54,16 @@ def parse(args) -> dict:
             "near_field": args.near_field}
 
 
-def render_scanlines(scene, params, truth: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def render_scanlines(scene, params, truth: np.ndarray, rng) -> tuple:
     """All cameras' scanlines over the walk: (frames, n_cams, W) bool, bearings (n_cams, W)
-    radians and blind radii (n_cams,) metres."""
+    radians, blind and sight radii (n_cams,) metres each."""
     from pipeline import Pipeline
     from render import Renderer
 
     with Renderer(scene) as renderer:
         pipe = Pipeline(scene.cameras, params, background=renderer.background().rgb)
         scans = np.stack([pipe.process(renderer.render(p, rng=rng).rgb) for p in truth])
-    return scans, pipe.bearings, pipe.blind_radius(scene.people.height)
+    return scans, pipe.bearings, *pipe.sight_range(scene.people.height)
 
 
 def run_trial(trial: int, opts: dict, seed: int) -> dict:
@@ -76,8 +76,8 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
     scene = with_people(load_scene(opts["scene"]), opts["people"])
     motion_rng, sensor_rng = core.trial_rng(seed, STUDY_ID, trial).spawn(2)
     truth = walk(scene, opts["frames"], motion_rng)
-    scans, bearings, near = render_scanlines(scene, load_params(opts["params"]), truth, sensor_rng)
-    source = PrecomputedSource(scans, bearings, near)
+    scans, bearings, near, far = render_scanlines(scene, load_params(opts["params"]), truth, sensor_rng)
+    source = PrecomputedSource(scans, bearings, near, far)
     n = len(scene.cameras)
     near_field = opts.get("near_field", True)
     full = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", n, near_field=near_field), truth, source)]
@@ -91,6 +91,10 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
 
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
     per_trial = runner(run_trial, [(t, opts, seed) for t in range(trials)], [opts["frames"]] * trials, "lab")
+    empty = [i for i, t in enumerate(per_trial) if t["min_full"] <= 0]
+    if empty:                                   # the residual's denominator
+        raise ValueError(f"--scene: the hull of all its cameras was empty in a frame of trial {empty[0]}, so the "
+                         "residual (hull area / the smallest all-camera hull) is undefined")
     records = []
     for tasker in opts["taskers"]:
         for k in opts["k"]:
