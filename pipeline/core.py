@@ -89,10 +89,6 @@ class Pipeline:
         margin = 1.0 if truth else p.column_threshold / p.temporal_alpha + p.opening_kernel
         return sight_range(self.cameras, object_height, margin, self.rectifier.width)
 
-    def blind_radius(self, object_height: float, truth: bool = False) -> np.ndarray:
-        """(n_cams,) float, metres: the ``near`` of :meth:`sight_range`."""
-        return self.sight_range(object_height, truth)[0]
-
     @property
     def frame_shape(self) -> tuple[int, int, int]:
         """(n_cams, H, W) expected of every batch."""

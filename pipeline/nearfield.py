@@ -39,7 +39,7 @@ from scene.checks import check_positive
 
 from .rectify import level_cameras, level_points
 
-__all__ = ["blind_radius", "image_edge", "sight_range"]
+__all__ = ["image_edge", "sight_range"]
 
 #: Points sampled along the raw image's upper and lower edges.
 EDGE_POINTS = 129
@@ -109,18 +109,9 @@ def sight_range(cameras, object_height: float, margin: float = 1.0,
             above = top > 0
             lo = np.where(above & (room > 0), top / room, lo)
             lo = np.where(above & (room <= 0), np.inf, lo)
-            hi = np.where(~above & (room < 0), np.minimum(hi, np.where(top < 0, -top / -room, 0.0)), hi)
+            hi = np.where(~above & (room < 0), np.minimum(hi, top / room), hi)   # both <= 0
         near[i], far[i] = float(np.max(lo)), float(np.min(hi))
         if near[i] >= far[i]:
             near[i], far[i] = np.inf, np.inf
     return near, far
 
-
-def blind_radius(cameras, object_height: float, margin: float = 1.0, width: int | None = None) -> np.ndarray:
-    """The ``near`` of :func:`sight_range`: (n_cams,) float, metres.
-
-    >>> from scene import load_scene
-    >>> blind_radius(load_scene("lab").cameras[:1], 1.75).round(2).tolist()
-    [0.71]
-    """
-    return sight_range(cameras, object_height, margin, width)[0]

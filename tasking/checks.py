@@ -23,6 +23,7 @@ from scene.checks import check_choice
 
 __all__ = [
     "check_angles",
+    "check_camera_radii",
     "check_cameras_outside_discs",
     "check_choice",
     "check_discs_disjoint",
@@ -30,7 +31,6 @@ __all__ = [
     "check_fov",
     "check_indices",
     "check_int",
-    "check_near",
     "check_points",
     "check_radii",
     "check_room",
@@ -97,7 +97,7 @@ def check_radii(name: str, radii, m: int) -> np.ndarray:
     return arr
 
 
-def check_near(name: str, radii, n: int) -> np.ndarray:
+def check_camera_radii(name: str, radii, n: int) -> np.ndarray:
     """Broadcast a camera's blind or sight radii ``radii`` (scalar or ``(n,)``, metres) to
     ``(n,)``, all >= 0 (``inf`` allowed)."""
     arr = np.asarray(radii, dtype=float)

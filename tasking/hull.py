@@ -25,11 +25,11 @@ from shapely.geometry.base import BaseGeometry
 from . import cones
 from .checks import (
     check_angles,
+    check_camera_radii,
     check_cameras_outside_discs,
     check_discs_disjoint,
     check_discs_in_room,
     check_fov,
-    check_near,
     check_points,
     check_radii,
     check_room,
@@ -153,9 +153,9 @@ def free_wedges_from_scanlines(camera_xy, bearings, scanlines, room, near=None, 
         bad = int(np.flatnonzero(~monotone)[0])
         raise ValueError(f"bearings must be strictly monotone along each row (row {bad})")
     if near is not None:
-        near = check_near("near", near, n)
+        near = check_camera_radii("near", near, n)
     if far is not None:
-        far = check_near("far", far, n)
+        far = check_camera_radii("far", far, n)
     yaw, fov, lo, hi = cones.scanline_intervals(bearings, scanlines)
     if np.any(fov >= 2 * np.pi):
         raise ValueError("bearings: the columns of a camera must span less than 2*pi")
@@ -209,17 +209,9 @@ def hull_from_wedges(wedges, room: Polygon, subset=None) -> BaseGeometry:
         return drop_slivers(shapely.difference(room, shapely.union_all(w, grid_size=grid), grid_size=grid), room)
     hull = room
     for g in w[np.argsort(-shapely.area(w), kind="stable")]:
-        hull = polygonal(shapely.difference(hull, g, grid_size=grid))
-    return drop_slivers(hull, room)
-
-
-def polygonal(geom: BaseGeometry) -> BaseGeometry:
-    """``geom`` without the points and lines an overlay may leave beside its polygons
-    (a snap-rounded overlay refuses such mixed input)."""
-    if geom.geom_type != "GeometryCollection":
-        return geom
-    parts = [p for p in shapely.get_parts(geom) if p.geom_type == "Polygon"]     # disjoint: one overlay's
-    return MultiPolygon(parts) if len(parts) > 1 else parts[0] if parts else Polygon()
+        # without slivers and stray points or lines, which the next snap-rounded overlay refuses
+        hull = drop_slivers(shapely.difference(hull, g, grid_size=grid), room)
+    return hull
 
 
 def overlay_grid(room: Polygon) -> float:
@@ -228,9 +220,10 @@ def overlay_grid(room: Polygon) -> float:
     GEOS's floating overlays can misjudge a polygon edge that runs along a wedge's edge
     (wedges of cameras whose fields of view line up along a wall or a diagonal): three
     90-degree corner cameras of an empty square gave an empty hull in three of the six
-    orders of the cameras, the right triangle in the others. Snap-rounding to a grid far below any length that matters
-    (``grid_size``) makes these overlays robust, at about 1.5-2 times the cost. The
-    taskers' own overlays stay floating: their hulls only rank candidate cameras.
+    orders of the cameras, the right triangle in the others. Snap-rounding to a grid far
+    below any length that matters (``grid_size``) makes these overlays robust, at about
+    1.5-2 times the cost. The taskers' own overlays stay floating: their hulls only rank
+    candidate cameras.
     """
     x0, y0, x1, y1 = room.bounds
     return GRID * max(x1 - x0, y1 - y0)

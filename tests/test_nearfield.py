@@ -8,10 +8,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, box
 
-from pipeline import Pipeline, blind_radius, load_params, sight_range
+from pipeline import Pipeline, load_params, sight_range
 from pipeline.rectify import level_cameras
 from scene import Camera
 from tasking import free_wedges_from_scanlines, visual_hull_of_scanlines
+
+
+def blind_radius(cameras, object_height, margin=1.0):
+    """The blind radius alone: the ``near`` of :func:`pipeline.sight_range`."""
+    return sight_range(cameras, object_height, margin)[0]
 
 
 def pinhole(height_m: float, pitch_deg: float, yaw_deg: float = 30.0) -> Camera:
@@ -72,8 +77,8 @@ def test_the_pipelines_margin_is_its_threshold_over_alpha_plus_the_opening(lab):
     params = load_params()
     pipe = Pipeline(lab.cameras[:1], params)
     margin = params.column_threshold / params.temporal_alpha + params.opening_kernel
-    assert pipe.blind_radius(1.75)[0] == blind_radius(lab.cameras[:1], 1.75, margin)[0]
-    assert pipe.blind_radius(1.75, truth=True)[0] == blind_radius(lab.cameras[:1], 1.75, 1.0)[0]
+    assert pipe.sight_range(1.75)[0][0] == blind_radius(lab.cameras[:1], 1.75, margin)[0]
+    assert pipe.sight_range(1.75, truth=True)[0][0] == blind_radius(lab.cameras[:1], 1.75, 1.0)[0]
 
 
 # --- wedges cut by the near field (hypothesis) ------------------------------------------
@@ -139,7 +144,7 @@ def test_hulls_keep_people_who_stand_close_to_a_camera(lab, lab_renderer):
     pipe = Pipeline(lab.cameras, load_params(), background=lab_renderer.background().rgb)
     xy, yaw, _ = lab.floor_poses()
     r, height, room = lab.people.radius, lab.people.height, lab.room.polygon
-    near, gt_near = pipe.blind_radius(height), pipe.blind_radius(height, truth=True)
+    near, gt_near = pipe.sight_range(height)[0], pipe.sight_range(height, truth=True)[0]
     rng = np.random.default_rng(5)
     cleared_without = []
     for camera, distance in ((8, 0.574), (0, 0.5), (5, 0.65), (12, 0.8)):

@@ -180,5 +180,7 @@ def test_scanlines_records_the_blind_radii_of_the_shortest_person(render_dir, tm
     params = PipelineParams.from_mapping(json.loads(capsys.readouterr().out)["params"])
     pipe = Pipeline(RenderDir(root).cameras, params)            # the calibration as the command read it
     with np.load(root / "scanlines.npz") as z:
-        np.testing.assert_array_equal(z["blind_radius"], pipe.blind_radius(1.6))
-        np.testing.assert_array_equal(z["gt_blind_radius"], pipe.blind_radius(1.6, truth=True))
+        for prefix, truth in (("", False), ("gt_", True)):
+            near, far = pipe.sight_range(1.6, truth=truth)
+            np.testing.assert_array_equal(z[f"{prefix}blind_radius"], near)
+            np.testing.assert_array_equal(z[f"{prefix}sight_radius"], far)
