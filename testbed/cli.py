@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import signal
 import sys
 import threading
@@ -69,6 +70,9 @@ def _terminate(signum, frame) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # OpenCV's own warnings ("findDecoder imread_(...)") would print beside the one-line
+    # error a command gives for the same file; set before OpenCV is imported (workers inherit it)
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
     try:
         parser = build_parser()     # imports every command module: numpy, OpenCV, shapely
     except KeyboardInterrupt:       # Ctrl-C in the first half second: no traceback either

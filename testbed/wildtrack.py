@@ -1,6 +1,6 @@
-"""Export an episode in the WILDTRACK / MultiviewX layout read by multi-view detection code.
+"""Export an episode in the WILDTRACK or MultiviewX layout read by multi-view detection code.
 
-::
+WILDTRACK (``layout="wildtrack"``)::
 
     OUT/Image_subsets/C<n>/NNNNNNNN.png      RGB frame of camera n (8-digit frame number)
     OUT/annotations_positions/NNNNNNNN.json  list, one entry per person:
@@ -13,14 +13,22 @@
                                                     cv2.FileStorage sequence
     OUT/grid.json                                   the ground grid below, and view -> camera number
 
+MultiviewX (``layout="multiviewx"``): the same, except ``Image_subsets/C<n>/NNNN.png``
+(4 digits), ``annotations_positions/NNNNN.json`` (5 digits),
+``calibrations/intrinsic/intr_Camera<n>.xml`` and ``calibrations/extrinsic/extr_Camera<n>.xml``
+with ``rvec`` and ``tvec`` as cv2.FileStorage 3x1 matrices (MultiviewX readers call
+``getNode('rvec').mat()``).
+
 Ground grid: origin at the corner ``(min x, min y)`` of the room's bounds (the world
 origin for the lab; ``origin_m`` in grid.json), cells of ``CELL`` = 0.025 m (WILDTRACK's
 2.5 cm), ``x_index = floor((x - min x) / CELL)`` (0..268 along the lab's 22 ft wall),
 ``y_index = floor((y - min y) / CELL)`` (0..231 along its 19 ft wall), ``positionID =
 x_index + grid_width * y_index`` (WILDTRACK's own convention, with its 480 replaced by
-our grid width, 269 for the lab). Boxes are inclusive pixel bounds of the person's *visible*
-label mask in the image as exported, all -1 when the person is not visible in that view;
-``viewNum`` is 0-based over the episode's cameras in number order.
+our grid width, 269 for the lab). Boxes are inclusive pixel bounds, in the image as
+exported, of the person's *visible* label mask (``boxes="visible"``) or *unoccluded*
+silhouette (``boxes="unoccluded"``: the whole body in view, as a box drawn around an
+annotated position; its bottom is the feet even behind someone), all -1 when there are no
+such pixels in that view; ``viewNum`` is 0-based over the episode's cameras in number order.
 
 Images are the rendered, lens-distorted frames, and ``intrinsic_zero`` holds the true
 distortion coefficients. With ``undistort`` (as WILDTRACK's own ``intrinsic_zero``
@@ -31,12 +39,14 @@ the label masks for the boxes by nearest neighbour), and the coefficients writte
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import shutil
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -48,6 +58,25 @@ from testbed.png import write_png
 
 #: Side of a ground-grid cell, metres (WILDTRACK: 2.5 cm).
 CELL = 0.025
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where a layout puts its files: calibration folders and names, digits of file numbers."""
+
+    intrinsic: str          # folder under calibrations/
+    camera: str             # calibration file stem after intr_ / extr_, {n} = camera number
+    image_digits: int       # Image_subsets/C<n>/<frame, zero-padded>.png
+    annotation_digits: int  # annotations_positions/<frame, zero-padded>.json
+    extrinsic_matrices: bool  # rvec, tvec as FileStorage matrices (else WILDTRACK's lines of numbers)
+
+
+LAYOUTS = {
+    "wildtrack": Layout("intrinsic_zero", "C{n}", 8, 8, False),
+    "multiviewx": Layout("intrinsic", "Camera{n}", 4, 5, True),
+}
+#: What the boxes bound: the visible label mask, or the unoccluded silhouette.
+BOXES = ("visible", "unoccluded")
 
 
 def ground_grid(room_bounds) -> tuple[tuple[float, float], int, int]:
@@ -77,24 +106,42 @@ def boxes(labels: np.ndarray, people: int) -> np.ndarray:
 
     labels : (n_cams, H, W) int, 0 background, person + 1 (pixel indices (row, col); x = col, y = row)
     """
-    out = np.full((len(labels), people, 4), -1, int)
-    for c, lab in enumerate(labels):
+    return _boxes(labels, people, lambda lab, i: lab == i + 1)
+
+
+def silhouette_boxes(bits: np.ndarray, people: int) -> np.ndarray:
+    """:func:`boxes` of unoccluded silhouettes ``bits`` (n_cams, H, W) int, bit i = person i.
+
+    >>> silhouette_boxes(np.array([[[0, 3], [2, 0]]]), 2).tolist()
+    [[[1, 0, 1, 0], [0, 0, 1, 1]]]
+    """
+    return _boxes(bits, people, lambda sil, i: (sil >> i) & 1 == 1)
+
+
+def _boxes(images: np.ndarray, people: int, mask: Callable[[np.ndarray, int], np.ndarray]) -> np.ndarray:
+    out = np.full((len(images), people, 4), -1, int)
+    for c, img in enumerate(images):
         for i in range(people):
-            rows = np.flatnonzero((lab == i + 1).any(axis=1))
+            m = mask(img, i)
+            rows = np.flatnonzero(m.any(axis=1))
             if rows.size:
-                cols = np.flatnonzero((lab[rows[0]:rows[-1] + 1] == i + 1).any(axis=0))
+                cols = np.flatnonzero(m[rows[0]:rows[-1] + 1].any(axis=0))
                 out[c, i] = (cols[0], rows[0], cols[-1], rows[-1])
     return out
 
 
-def _write_extrinsic(path: Path, rvec: np.ndarray, tvec: np.ndarray) -> None:
+def _write_extrinsic(path: Path, rvec: np.ndarray, tvec: np.ndarray, matrices: bool = False) -> None:
     """WILDTRACK's extrinsic file: ``<rvec>a b c</rvec>`` and ``<tvec>..</tvec>`` in an
     ``opencv_storage`` root, each one line of numbers split by single spaces.
 
     cv2.FileStorage reads each as a sequence; MVDet's WILDTRACK reader parses the element's
     text with ElementTree and ``split(' ')``. (FileStorage itself would write matrices,
-    which that reader cannot parse, and wraps long sequences over lines.)
+    which that reader cannot parse, and wraps long sequences over lines.) With ``matrices``,
+    MultiviewX's: 3x1 FileStorage matrices.
     """
+    if matrices:
+        _write_fs(path, rvec=np.reshape(rvec, (3, 1)), tvec=np.reshape(tvec, (3, 1)))
+        return
     line = lambda v: " ".join(repr(float(x)) for x in np.ravel(v))
     path.write_text(f'<?xml version="1.0"?>\n<opencv_storage>\n<rvec>{line(rvec)}</rvec>\n'
                     f"<tvec>{line(tvec)}</tvec>\n</opencv_storage>\n")
@@ -115,30 +162,41 @@ def undistort_maps(K: np.ndarray, dist: np.ndarray, size: tuple[int, int]) -> tu
     return cv2.initUndistortRectifyMap(K, dist, None, K, size, cv2.CV_32FC1)
 
 
-def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undistort: bool = False,
-                     progress: Callable[[int], None] | None = None) -> Path:
-    """Write episode folder ``episode`` to ``out`` in the WILDTRACK layout (atomically); return ``out``.
+def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: str = "wildtrack",
+                   undistort: bool = False, box: str = "visible",
+                   progress: Callable[[int], None] | None = None) -> Path:
+    """Write episode folder ``episode`` to ``out`` in ``layout`` (atomically); return ``out``.
 
+    layout : a key of ``LAYOUTS``
     undistort : export pinhole images (and boxes) with zero distortion coefficients
+    box : what the boxes bound, one of ``BOXES``
     progress : called with 1 for every image written (from several threads)
     Cameras are exported on a thread per core (OpenCV and the PNG encoder release the GIL).
+    ``out`` may be a link to a folder (the folder is replaced). Folders made for ``out`` are
+    removed again when the export fails.
     """
     from scene import Scene
     from testbed.dataset import read_calibration
     from testbed.parallel import default_workers
 
-    episode, out = Path(episode), Path(out)
+    lay = LAYOUTS[layout]
+    if box not in BOXES:
+        raise ValueError(f"box: expected one of {', '.join(BOXES)}, got {box!r}")
+    episode, out = Path(episode), Path(out).resolve()   # resolved: "." has no name to replace
     meta = json.loads((episode / "meta.json").read_text())
     numbers = list(meta["cameras"])
     frames = int(meta["frames"])
     room = Scene.from_text(meta["scene_yaml"], source=str(episode / "meta.json")).room
     origin, gw, gh = ground_grid(room.polygon.bounds)
-    table = read_people(episode / "people.csv")
     P = int(meta["people"])
+    table = people_table(episode / "people.csv", frames, P)
+    made = [f for f in out.parents if not f.exists()]            # deepest first
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = temp_folder(out.parent, f".{out.name}.")
+    tmp = None
     try:
-        for sub in ("annotations_positions", "calibrations/intrinsic_zero", "calibrations/extrinsic"):
+        tmp = temp_folder(out.parent, f".{out.name}.")
+        calibrations = tmp / "calibrations"
+        for sub in ("annotations_positions", f"calibrations/{lay.intrinsic}", "calibrations/extrinsic"):
             (tmp / sub).mkdir(parents=True)
         maps = {}                              # camera number -> undistortion maps (undistort only)
         for n in numbers:
@@ -148,35 +206,57 @@ def export_wildtrack(episode: str | os.PathLike, out: str | os.PathLike, undisto
             if undistort:
                 maps[n] = undistort_maps(c["K"], c["dist"], (c["width"], c["height"]))
                 dist = np.zeros_like(dist)
-            _write_fs(tmp / "calibrations" / "intrinsic_zero" / f"intr_C{n}.xml",
-                      camera_matrix=c["K"], distortion_coefficients=dist)
-            _write_extrinsic(tmp / "calibrations" / "extrinsic" / f"extr_C{n}.xml", c["rvec"], c["tvec"])
+            stem = lay.camera.format(n=n)
+            _write_fs(calibrations / lay.intrinsic / f"intr_{stem}.xml", camera_matrix=c["K"],
+                      distortion_coefficients=dist)
+            _write_extrinsic(calibrations / "extrinsic" / f"extr_{stem}.xml", c["rvec"], c["tvec"],
+                             lay.extrinsic_matrices)
         with ThreadPoolExecutor(max_workers=min(default_workers(), len(numbers))) as pool:
             b = np.stack(list(pool.map(
-                lambda n: _export_camera(episode, meta, n, P, tmp / "Image_subsets" / f"C{n}", maps.get(n), progress),
+                lambda n: _export_camera(episode, meta, n, P, tmp / "Image_subsets" / f"C{n}", maps.get(n),
+                                         lay.image_digits, box, progress),
                 numbers)), axis=1)                                     # (frames, n_cams, P, 4)
         for f in range(frames):
             rows = table[table["frame"] == f]
-            xy = np.column_stack([rows["x"], rows["y"]]).astype(float)
-            pids = position_id(xy, gw, origin)
-            ann = [{"personID": int(rows["person_id"][k]), "positionID": int(pids[k]),
-                    "views": [{"viewNum": v, "xmin": int(b[f, v, k, 0]), "ymin": int(b[f, v, k, 1]),
-                               "xmax": int(b[f, v, k, 2]), "ymax": int(b[f, v, k, 3])} for v in range(len(numbers))]}
-                   for k in range(len(rows))]
-            (tmp / "annotations_positions" / f"{f:08d}.json").write_text(json.dumps(ann))
+            pids = position_id(np.column_stack([rows["x"], rows["y"]]).astype(float), gw, origin)
+            ann = [{"personID": int(i), "positionID": int(pid),
+                    "views": [{"viewNum": v, "xmin": int(b[f, v, i, 0]), "ymin": int(b[f, v, i, 1]),
+                               "xmax": int(b[f, v, i, 2]), "ymax": int(b[f, v, i, 3])} for v in range(len(numbers))]}
+                   for i, pid in zip(rows["person_id"], pids, strict=True)]
+            (tmp / "annotations_positions" / f"{f:0{lay.annotation_digits}d}.json").write_text(json.dumps(ann))
         (tmp / "grid.json").write_text(json.dumps({
-            "cell_m": CELL, "origin_m": list(origin), "grid_width": gw, "grid_height": gh,
+            "layout": layout, "cell_m": CELL, "origin_m": list(origin), "grid_width": gw, "grid_height": gh,
             "position_id": "x_index + grid_width * y_index, x_index = floor((x - origin_m[0]) / cell_m), "
                            "y_index = floor((y - origin_m[1]) / cell_m)",
             "views": {str(v): n for v, n in enumerate(numbers)}, "units": "metres, world frame",
-            "undistorted": bool(undistort), "source": str(episode)}, indent=1) + "\n")
+            "undistorted": bool(undistort), "boxes": box, "source": str(episode)}, indent=1) + "\n")
         if out.exists():
             shutil.rmtree(out)
         os.rename(tmp, out)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+        for folder in made:
+            with contextlib.suppress(OSError):
+                folder.rmdir()
         raise
     return out
+
+
+def people_table(path: Path, frames: int, people: int) -> np.ndarray:
+    """people.csv (:func:`testbed.dataset.read_people`), refused in one line unless it lists
+    each of the ``people`` persons once in each of the ``frames`` frames."""
+    if people == 0:
+        return np.zeros(0, [("frame", int), ("person_id", int), ("x", float), ("y", float)])
+    try:
+        table = np.atleast_1d(read_people(path))
+        listed = sorted(zip(table["frame"].tolist(), table["person_id"].tolist()))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path}: cannot read ({exc})") from None
+    if listed != [(f, i) for f in range(frames) for i in range(people)]:
+        raise ValueError(f"{path}: expected one row per person (0..{people - 1}) and frame (0..{frames - 1}), "
+                         f"as meta.json says; its {len(table)} rows do not")
+    return table
 
 
 def _remapped(image: np.ndarray, maps, interpolation: int) -> np.ndarray:
@@ -186,28 +266,38 @@ def _remapped(image: np.ndarray, maps, interpolation: int) -> np.ndarray:
     return cv2.remap(image, maps[0], maps[1], interpolation, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
 
 
-def _export_camera(episode: Path, meta: dict, number: int, people: int, dest: Path, maps,
-                   progress: Callable[[int], None] | None) -> np.ndarray:
-    """Camera ``number``'s RGB frames to ``dest/NNNNNNNN.png`` (copied PNGs, decoded video, or
-    undistorted); returns its boxes (frames, people, 4) int from its label masks (see :func:`boxes`)."""
-    from pipeline.io import read_labels
+def _export_camera(episode: Path, meta: dict, number: int, people: int, dest: Path, maps, digits: int,
+                   box: str, progress: Callable[[int], None] | None) -> np.ndarray:
+    """Camera ``number``'s RGB frames to ``dest/<frame, zero-padded to digits>.png`` (copied
+    PNGs, decoded video, or undistorted); returns its boxes (frames, people, 4) int from its
+    label masks or silhouettes (``box``; see :func:`boxes`)."""
+    from pipeline.io import read_labels, read_rgb
 
     frames = int(meta["frames"])
     if meta.get("format") == "video":
         from testbed.lossless import read_video
-        images = read_video(episode / "frames" / f"cam{number:02d}.mkv")
+        video = episode / "frames" / f"cam{number:02d}.mkv"
+        images = read_video(video)
     else:
         images = (episode / "frames" / f"cam{number:02d}" / f"{f:06d}.png" for f in range(frames))
+    folder, find = ("masks", boxes) if box == "visible" else ("silhouettes", silhouette_boxes)
     out = np.empty((frames, people, 4), int)
-    for f, image in zip(range(frames), images, strict=True):
+    done = 0
+    for f, image in zip(range(frames), images):
+        name = dest / f"{f:0{digits}d}.png"
         if isinstance(image, Path) and maps is None:
-            shutil.copyfile(image, dest / f"{f:08d}.png")
+            if not image.is_file():
+                raise ValueError(f"image: cannot read {str(image)!r}")
+            shutil.copyfile(image, name)
         else:
             if isinstance(image, Path):
-                image = cv2.cvtColor(cv2.imread(str(image), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
-            write_png(dest / f"{f:08d}.png", _remapped(image, maps, cv2.INTER_LINEAR))
-        labels = read_labels(episode / "masks" / f"cam{number:02d}" / f"{f:06d}.png").astype(np.uint16)
-        out[f] = boxes(_remapped(labels, maps, cv2.INTER_NEAREST)[None], people)[0]
+                image = read_rgb(image)
+            write_png(name, _remapped(image, maps, cv2.INTER_LINEAR))
+        labels = read_labels(episode / folder / f"cam{number:02d}" / f"{f:06d}.png").astype(np.uint16)
+        out[f] = find(_remapped(labels, maps, cv2.INTER_NEAREST)[None], people)[0]
+        done += 1
         if progress is not None:
             progress(1)
+    if done < frames:
+        raise ValueError(f"video: {video} holds {done} frames; meta.json says {frames}")
     return out

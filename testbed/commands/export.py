@@ -1,21 +1,27 @@
-"""``camtask export wildtrack DIR OUT [--episode N] [--undistort]``: an episode in the WILDTRACK layout.
+"""``camtask export wildtrack|multiviewx DIR OUT [--episode N] [--undistort] [--boxes visible|unoccluded]``.
 
-See :mod:`testbed.wildtrack` and docs/dataset.md for the layout, the ground grid and
-positionID.
+An episode in the WILDTRACK or MultiviewX layout. See :mod:`testbed.wildtrack` and
+docs/dataset.md for the layouts, the ground grid and positionID.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
+#: testbed.wildtrack.LAYOUTS and BOXES (not imported here: it imports OpenCV, and the parser is built at start-up).
+LAYOUTS = ("wildtrack", "multiviewx")
+BOXES = ("visible", "unoccluded")
+
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser("export", help="export an episode for multi-view detection code (WILDTRACK layout)",
+    p = subparsers.add_parser("export", help="export an episode for multi-view detection code (WILDTRACK or "
+                                             "MultiviewX layout)",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("layout", choices=("wildtrack",), help="output layout")
+    p.add_argument("layout", choices=LAYOUTS, help="output layout")
     p.add_argument("dir", metavar="DIR", help="dataset folder from `camtask render` (or one episode folder)")
     p.add_argument("out", metavar="OUT", help="output folder (must not exist or be empty)")
     p.add_argument("--episode", type=int, default=None,
@@ -24,6 +30,9 @@ def add_parser(subparsers) -> None:
                    help="pinhole images: frames undistorted to the same camera matrix, zero distortion "
                         "coefficients written (as WILDTRACK's intrinsic_zero; default: the rendered frames "
                         "and their true coefficients)")
+    p.add_argument("--boxes", choices=BOXES, default="visible",
+                   help="what a view's box bounds: the person's visible mask (default), or the unoccluded "
+                        "silhouette, the whole body in view even behind someone (its bottom is the feet)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing non-empty OUT")
     p.set_defaults(func=run)
 
@@ -33,7 +42,7 @@ def run(args) -> int:
 
     from testbed.episodes import episode_name
     from testbed.generate import MANIFEST
-    from testbed.wildtrack import export_wildtrack
+    from testbed.wildtrack import export_episode, people_table
 
     root = Path(args.dir)
     index = 0 if args.episode is None else args.episode
@@ -52,10 +61,13 @@ def run(args) -> int:
     check_export_out(args.out, args.overwrite)
     check_intact(episode)
     meta = json.loads((episode / "meta.json").read_text())
+    people_table(episode / "people.csv", int(meta["frames"]), int(meta["people"]))   # before the progress bar
     with tqdm(total=len(meta["cameras"]) * int(meta["frames"]), desc="export", unit="image", file=sys.stderr,
               dynamic_ncols=True) as bar:
-        export_wildtrack(episode, args.out, undistort=args.undistort, progress=bar.update)
-    print(f"wrote {episode} as WILDTRACK layout{' (undistorted)' if args.undistort else ''} to {args.out}",
+        export_episode(episode, args.out, args.layout, undistort=args.undistort, box=args.boxes,
+                       progress=bar.update)
+    name = {"wildtrack": "WILDTRACK", "multiviewx": "MultiviewX"}[args.layout]
+    print(f"wrote {episode} as {name} layout{' (undistorted)' if args.undistort else ''} to {args.out}",
           file=sys.stderr)
     return 0
 
@@ -80,13 +92,23 @@ def check_apart(out: str, *sources: Path, dataset: Path | None = None) -> None:
 
 
 def check_export_out(out: str, overwrite: bool) -> None:
-    """Refuse an OUT that is a file, or a non-empty folder unless ``overwrite`` and it is an
-    earlier export (it holds grid.json): anything else in it is none of ours to delete."""
-    from testbed.generate import refuse_foreign
+    """Refuse an OUT that is a file, the current folder or one holding it (replacing OUT
+    removes it), inside an episode of a dataset, under a file or in a folder that cannot be
+    written, or a non-empty folder unless ``overwrite`` and it is an earlier export (it holds
+    grid.json): anything else in it is none of ours to delete."""
+    from testbed.generate import check_outside_episodes, refuse_foreign
 
     o = Path(out)
     if o.exists() and not o.is_dir():
         raise FileExistsError(f"OUT: {out} exists and is not a directory")
+    here = Path.cwd().resolve()
+    if o.resolve() == here or o.resolve() in here.parents:
+        raise ValueError(f"OUT: {out or '.'} is the current folder or holds it, which the export would replace; "
+                         "give a folder beside it")
+    check_outside_episodes("OUT", o)
+    parent = next(f for f in o.resolve().parents if f.exists())     # the nearest existing folder above OUT
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"OUT: cannot make {out} ({parent} is not a writable folder)")
     others = sorted(p.name for p in o.iterdir()) if o.is_dir() else []
     if others and not overwrite:
         raise FileExistsError(f"OUT: {out} exists and is not empty; choose another directory "
