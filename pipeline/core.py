@@ -187,7 +187,7 @@ class Pipeline:
         frames = check_frames("frames", frames, self.frame_shape)
         self._terms.mask(frames, self._buf)
         stacked = self._buf.reshape(-1, self.width)
-        opened = open_stacked(stacked, self.params.opening_kernel)
+        opened = open_stacked(stacked, self.params.opening_kernel, self.height)
         return opened.copy() if opened is stacked else opened
 
     def ground_truth(self, labels) -> tuple[np.ndarray, np.ndarray]:

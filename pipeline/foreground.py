@@ -160,17 +160,21 @@ def open_masks(masks, kernel: int) -> np.ndarray:
     n, h, w = masks.shape
     buf = np.zeros((n, h + pad, w), np.uint8)
     buf[:, :h] = masks
-    opened = open_stacked(buf.reshape(n * (h + pad), w), kernel)
+    opened = open_stacked(buf.reshape(n * (h + pad), w), kernel, h)
     return opened.reshape(n, h + pad, w)[:, :h].astype(bool)
 
 
-def open_stacked(stacked: np.ndarray, kernel: int) -> np.ndarray:
-    """Opening of a stack of masks laid out with >= kernel // 2 zero rows between them.
+def open_stacked(stacked: np.ndarray, kernel: int, height: int) -> np.ndarray:
+    """Opening of a stack of masks of ``height`` rows laid out with >= kernel // 2 zero rows between them.
 
     stacked : (rows, W) uint8, 0 or 255 (any one non-zero value). One OpenCV call for all cameras; the zero rows keep the
-    cameras apart, and the constant-zero border makes edges behave like the separators.
+    cameras apart, and the constant-zero border makes edges behave like the separators. A
+    kernel taller than a mask or wider than it always meets a zero: the opening is empty
+    (at once, where OpenCV would take seconds per frame for a kernel in the thousands).
     """
     if kernel == 1:
         return stacked
+    if kernel > min(height, stacked.shape[1]):
+        return np.zeros_like(stacked)
     k = cv2.getStructuringElement(cv2.MORPH_RECT, (kernel, kernel))
     return cv2.morphologyEx(stacked, cv2.MORPH_OPEN, k, borderType=cv2.BORDER_CONSTANT, borderValue=0)

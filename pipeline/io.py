@@ -140,6 +140,13 @@ class RenderDir:
                              "or decode the videos with testbed.lossless.read_video")
         if not self.frame_names:
             raise ValueError(f"render directory: {first} has no frames")
+        for name in self.names[1:]:             # frame i is the same moment in every camera
+            other = self.root / "frames" / name
+            names = tuple(sorted(p.name for p in other.glob("*.png")))
+            if names != self.frame_names:
+                odd = sorted(set(names) ^ set(self.frame_names))
+                raise ValueError(f"render directory: {other} and {first} hold different frames ({len(names)} and "
+                                 f"{len(self.frame_names)}; {odd[0]} is in one only); frames are matched by name")
 
     def __len__(self) -> int:
         return len(self.frame_names)

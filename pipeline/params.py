@@ -8,12 +8,13 @@ Every error is one line naming the parameter and what was expected.
 >>> PipelineParams.from_mapping({"median_kernel": 4})
 Traceback (most recent call last):
 ...
-ValueError: median_kernel: expected an odd integer >= 1, got 4
+ValueError: median_kernel: expected an odd integer in 1..8191, got 4
 """
 
 from __future__ import annotations
 
 import dataclasses
+import numbers
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
@@ -22,17 +23,23 @@ from typing import Any
 
 import yaml
 
+from scene import yamlio
 from scene.checks import check_mapping, check_positive
 
 from .files import write_atomic
 
 DEFAULT_PATH = Path(__file__).resolve().parent.parent / "assets" / "pipeline" / "default.yaml"
+#: The widest filter, pixels: twice the width of a 4K image. Wider ones change nothing an
+#: image could show, and would only take memory (a 10**5 opening asked for 10 GB).
+MAX_KERNEL = 8191
 
 
 def check_odd_kernel(name: str, value: Any) -> int:
-    """Return ``value`` as an odd integer >= 1 (a filter size), else raise naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1 or value % 2 == 0:
-        raise ValueError(f"{name}: expected an odd integer >= 1, got {value!r}")
+    """Return ``value`` as an odd integer in 1..``MAX_KERNEL`` (a filter size, pixels; NumPy
+    integers too), else raise naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not 1 <= value <= MAX_KERNEL \
+            or value % 2 == 0:
+        raise ValueError(f"{name}: expected an odd integer in 1..{MAX_KERNEL}, got {value!r}")
     return int(value)
 
 
@@ -101,7 +108,9 @@ class PipelineParams:
         if not path.is_file():
             raise FileNotFoundError(f"params: no such file {str(path)!r}")
         try:
-            data = yaml.safe_load(path.read_text())
+            data = yamlio.load(path.read_text(encoding="utf-8"))
+        except UnicodeDecodeError:
+            raise ValueError(f"params: {path} is not UTF-8 text") from None
         except yaml.YAMLError as exc:
             raise ValueError(f"params: {path} is not valid YAML ({str(exc).splitlines()[0]})") from None
         if isinstance(data, Mapping) and set(data) == {"pipeline"}:

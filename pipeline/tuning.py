@@ -6,6 +6,7 @@ process, so the same data and seed give the same trials and the same best parame
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -26,6 +27,17 @@ SPACE = {
     "median_kernel": ("int", 1, 15, 2),
     "column_threshold": ("float", 1.0, 60.0),
 }
+
+
+def outside_space(params: PipelineParams) -> dict[str, tuple]:
+    """The parameters of ``params`` that :data:`SPACE` does not reach: name -> (value, low,
+    high). The first trial still uses them; the search never comes back to them.
+
+    >>> outside_space(PipelineParams(threshold_deg=45.0, opening_kernel=11))
+    {'threshold_deg': (45.0, 1.0, 30.0), 'opening_kernel': (11, 1, 9)}
+    """
+    return {name: (getattr(params, name), low, high) for name, (_, low, high, *_) in SPACE.items()
+            if not low <= getattr(params, name) <= high}
 
 
 @dataclass(frozen=True)
@@ -66,7 +78,9 @@ def tune(cameras, background, frames, gt_scanlines, n_trials: int, seed: int = 0
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     base = Pipeline(cameras, start, background)   # maps and background serve every trial
     study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
-    study.enqueue_trial({k: getattr(start, k) for k in SPACE})
+    with warnings.catch_warnings():        # a start outside SPACE: see outside_space
+        warnings.filterwarnings("ignore", message="Fixed parameter .* is out of range", category=UserWarning)
+        study.enqueue_trial({k: getattr(start, k) for k in SPACE})
     f1s = []
 
     def objective(trial):
@@ -76,6 +90,8 @@ def tune(cameras, background, frames, gt_scanlines, n_trials: int, seed: int = 0
             progress(f1)
         return f1
 
-    study.optimize(objective, n_trials=n_trials)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Fixed parameter .* is out of range", category=UserWarning)
+        study.optimize(objective, n_trials=n_trials)
     best = PipelineParams(**study.best_params)
     return TuneResult(best, float(study.best_value), f1s[0], np.array(f1s))

@@ -68,5 +68,9 @@ def read_calibration(path: str | os.PathLike) -> dict:
 
 
 def read_people(path: str | os.PathLike) -> np.ndarray:
-    """people.csv as a structured array (frame, person_id, x, y, radius, height)."""
-    return np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8")
+    """people.csv as a structured array (frame, person_id, x, y, radius, height); a
+    one-line ValueError naming the file when it cannot be parsed."""
+    try:
+        return np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8")
+    except ValueError as exc:               # "Some errors were detected !\n    Line #2 (got 4 columns ...)"
+        raise ValueError(f"{path}: cannot read ({' '.join(str(exc).split())})") from None

@@ -195,6 +195,8 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
     out = Path(out)
     if resume and overwrite:
         raise ValueError("--resume and --overwrite: expected at most one of them")
+    from testbed.output import check_outside_episodes
+
     check_outside_episodes("--out", out)
     if out.exists() and not out.is_dir():
         raise FileExistsError(f"--out: {out} exists and is not a directory")
@@ -211,15 +213,6 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
                               "or --overwrite to replace it")
     refuse_foreign(out, others, MANIFEST, "a camtask render dataset", "--resume" if resume else "--overwrite")
     return out
-
-
-def check_outside_episodes(option: str, out: Path | str) -> None:
-    """Refuse an ``out`` inside an episode of any dataset: its manifest checksums the
-    episode's files, so they would fail `camtask verify` and `--resume` would delete them."""
-    for folder in Path(out).resolve().parents:
-        if folder.name.startswith("episode_") and (folder.parent / MANIFEST).is_file():
-            raise ValueError(f"{option}: {out} is inside {folder}, an episode of the dataset {folder.parent}, whose "
-                             "manifest.json checksums its files; choose a folder outside that dataset")
 
 
 def refuse_foreign(folder: Path | str, others: list[str], marker: str, what: str, flag: str) -> None:

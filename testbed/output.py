@@ -18,34 +18,60 @@ from pipeline.files import write_atomic
 
 def check_output_file(option: str, path: str | os.PathLike, suffix: str | None = None) -> Path:
     """``path`` as a Path, or a one-line ValueError naming ``option``: a file name (with
-    ``suffix``, e.g. ``".png"``, any case, when given) whose folder exists or can be made.
-    Missing folders are made to find out (a dangling link, ``/proc``) and removed again:
-    the command may still stop on another argument, and the file is written at the end.
+    ``suffix``, e.g. ``".png"``, any case, when given) that is not a folder, a device or a
+    pipe (the file is replaced, not written into), not inside an episode of a dataset
+    (:func:`check_outside_episodes`), in a folder that exists or can be made and where a
+    file can be created. Missing folders are made to find out (a dangling link, ``/proc``)
+    and removed again: the command may still stop on another argument, and the file is
+    written at the end.
 
     >>> import tempfile
     >>> top = tempfile.mkdtemp()
     >>> check_output_file("--plot", f"{top}/new/fig.png", ".png").name, os.listdir(top)
     ('fig.png', [])
     """
+    text = os.fspath(path)
+    if not text or text.endswith(("/", os.sep)):
+        raise ValueError(f"{option}: expected a file name, got {text!r}")
     p = Path(path)
     if suffix is not None and p.suffix.lower() != suffix:
-        raise ValueError(f"{option}: expected a {suffix} file name, got {str(path)!r}")
+        raise ValueError(f"{option}: expected a {suffix} file name, got {text!r}")
     if p.is_dir():
         raise ValueError(f"{option}: {p} is a folder; expected a file name")
+    if p.exists() and not p.is_file():      # /dev/null: replacing it would break the machine
+        raise ValueError(f"{option}: {p} exists and is not a regular file (a device, pipe or socket); "
+                         "give a file name")
+    check_outside_episodes(option, p)
     if p.parent.exists() and not p.parent.is_dir():
         raise ValueError(f"{option}: cannot write to {p.parent} (not a folder)")
     missing = [f for f in (p.parent, *p.parent.parents) if not f.exists()]   # deepest first
     try:
-        p.parent.mkdir(parents=True, exist_ok=True)
-        if not os.access(p.parent, os.W_OK | os.X_OK):
-            raise ValueError(f"{option}: cannot write to {p.parent} (not a writable folder)")
-    except OSError as exc:
-        raise ValueError(f"{option}: cannot make the folder {p.parent} ({exc.strerror or exc})") from None
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ValueError(f"{option}: cannot make the folder {p.parent} ({exc.strerror or exc})") from None
+        probe = p.parent / f".{p.name}.probe.{os.getpid()}"      # os.access says yes to root, even in /proc
+        try:
+            os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+            probe.unlink()
+        except OSError as exc:
+            raise ValueError(f"{option}: cannot write to {p.parent} ({exc.strerror or exc})") from None
     finally:
         for folder in missing:
             with contextlib.suppress(OSError):
                 folder.rmdir()
     return p
+
+
+def check_outside_episodes(option: str, out: str | os.PathLike) -> None:
+    """Refuse an ``out`` inside an episode of any dataset: its manifest checksums the
+    episode's files, so they would fail `camtask verify` and `--resume` would delete them."""
+    from testbed.generate import MANIFEST
+
+    for folder in Path(out).resolve().parents:
+        if folder.name.startswith("episode_") and (folder.parent / MANIFEST).is_file():
+            raise ValueError(f"{option}: {out} is inside {folder}, an episode of the dataset {folder.parent}, whose "
+                             "manifest.json checksums its files; choose a folder outside that dataset")
 
 
 def save_figure(fig, path: str | os.PathLike, dpi: float = 80) -> None:

@@ -248,10 +248,10 @@ def people_table(path: Path, frames: int, people: int) -> np.ndarray:
     each of the ``people`` persons once in each of the ``frames`` frames."""
     if people == 0:
         return np.zeros(0, [("frame", int), ("person_id", int), ("x", float), ("y", float)])
+    table = np.atleast_1d(read_people(path))
     try:
-        table = np.atleast_1d(read_people(path))
         listed = sorted(zip(table["frame"].tolist(), table["person_id"].tolist()))
-    except (OSError, ValueError) as exc:
+    except ValueError as exc:               # no such column
         raise ValueError(f"{path}: cannot read ({exc})") from None
     if listed != [(f, i) for f in range(frames) for i in range(people)]:
         raise ValueError(f"{path}: expected one row per person (0..{people - 1}) and frame (0..{frames - 1}), "

@@ -29,8 +29,11 @@ def test_yaml_round_trip(tmp_path):
 
 @pytest.mark.parametrize("changes, match", [
     ({"colour": 3}, r"unknown key 'colour'"),
-    ({"opening_kernel": 4}, r"opening_kernel: expected an odd integer >= 1, got 4"),
-    ({"median_kernel": -3}, r"median_kernel: expected an odd integer >= 1, got -3"),
+    ({"opening_kernel": 4}, r"opening_kernel: expected an odd integer in 1..8191, got 4"),
+    ({"median_kernel": -3}, r"median_kernel: expected an odd integer in 1..8191, got -3"),
+    # a 10**5 opening asked OpenCV for 10 GB, and the process was killed without a word
+    ({"opening_kernel": 100001}, r"opening_kernel: expected an odd integer in 1..8191, got 100001"),
+    ({"spatial_kernel": 10**9 + 1}, r"spatial_kernel: expected an odd integer in 1..8191"),
     ({"spatial_kernel": 2.0}, r"spatial_kernel: expected an odd integer"),
     ({"threshold_deg": -1}, r"threshold_deg: expected a .*number"),
     ({"threshold_deg": 90}, r"threshold_deg: expected a number in \(0, 90\)"),
@@ -41,6 +44,19 @@ def test_yaml_round_trip(tmp_path):
 def test_bad_parameters(changes, match):
     with pytest.raises(ValueError, match=match):
         PipelineParams.from_mapping(changes)
+
+
+def test_numpy_integers_and_exponent_floats_are_numbers(tmp_path):
+    """A grid search over np.arange, and ``1e-3`` in a file (a string to YAML 1.1)."""
+    assert PipelineParams(opening_kernel=np.int64(7), median_kernel=np.int32(9)).opening_kernel == 7
+    (tmp_path / "p.yaml").write_text("temporal_alpha: 1e-3\ncolumn_threshold: 5E1\n")
+    assert load_params(tmp_path / "p.yaml") == PipelineParams(temporal_alpha=0.001, column_threshold=50.0)
+
+
+def test_a_file_that_is_not_utf8_is_named(tmp_path):
+    (tmp_path / "b.yaml").write_bytes(b"\xff\xfe\x00bad")
+    with pytest.raises(ValueError, match=f"params: {tmp_path / 'b.yaml'} is not UTF-8 text"):
+        load_params(tmp_path / "b.yaml")
 
 
 def test_bad_yaml_file(tmp_path):

@@ -137,6 +137,11 @@ def test_opening_removes_specks_keeps_blocks_and_edges():
     np.testing.assert_array_equal(out[1], m[1])
     ref = np.stack([ndimage.binary_opening(x, np.ones((3, 3)), border_value=0) for x in m])
     np.testing.assert_array_equal(out, ref)
+    m[1] = True
+    for k in (9, 11, 8191):        # 11 and up: taller than the masks, so always empty (without OpenCV)
+        ref = np.stack([ndimage.binary_opening(x, np.ones((min(k, 13),) * 2), border_value=0) for x in m])
+        np.testing.assert_array_equal(open_masks(m, k), ref)
+    assert open_masks(m, 9)[1].all() and not open_masks(m, 11).any()
 
 
 # --- rectification and the bearing map -------------------------------------------------

@@ -149,6 +149,16 @@ def test_bad_documents(tmp_path, text, match):
         Scene.from_yaml(path)
 
 
+def test_exponents_without_a_dot_are_numbers(tmp_path):
+    """``25e-2`` and ``175E-2`` are floats in YAML 1.2 and every language; YAML 1.1 read them as strings."""
+    text = scene_path("lab").read_text()
+    assert "radius: 0.25 " in text and "height: 1.75 " in text
+    path = tmp_path / "s.yaml"
+    path.write_text(text.replace("radius: 0.25 ", "radius: 25e-2 ").replace("height: 1.75 ", "height: 175E-2 "))
+    people = Scene.from_yaml(path).people
+    assert (people.radius, people.height) == (0.25, 1.75)
+
+
 def test_missing_file_and_camera_validation(tmp_path):
     with pytest.raises(FileNotFoundError, match="scene file not found"):
         load_scene(tmp_path / "nope.yaml")

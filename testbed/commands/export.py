@@ -96,7 +96,8 @@ def check_export_out(out: str, overwrite: bool) -> None:
     removes it), inside an episode of a dataset, under a file or in a folder that cannot be
     written, or a non-empty folder unless ``overwrite`` and it is an earlier export (it holds
     grid.json): anything else in it is none of ours to delete."""
-    from testbed.generate import check_outside_episodes, refuse_foreign
+    from testbed.generate import refuse_foreign
+    from testbed.output import check_outside_episodes
 
     o = Path(out)
     if o.exists() and not o.is_dir():

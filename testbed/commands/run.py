@@ -52,7 +52,7 @@ def prepare(args):
     if args.frames < 1:
         raise ValueError(f"--frames: expected a number >= 1, got {args.frames}")
     check_seed(args.seed)
-    if args.video:
+    if args.video is not None:
         check_output_file("--video", args.video, ".mp4")
     scene = with_people(load_scene(args.scene), args.people)
     check_renderable(scene, "SCENE")
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         print()
     else:
         print(format_summary(summary))
-    if args.video:
+    if args.video is not None:
         print(f"video: {Path(args.video)}", file=sys.stderr)
     return 0
 

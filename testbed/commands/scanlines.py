@@ -46,7 +46,7 @@ def run(args) -> int:
     from testbed.output import check_output_file
 
     params = load_params(args.params)
-    if args.out:
+    if args.out is not None:
         check_output_file("--out", args.out)
     if args.frames is not None and args.frames < 1:
         raise ValueError(f"--frames: expected an integer >= 1, got {args.frames}")
@@ -67,14 +67,14 @@ def _run_render(args, params) -> int:
     from pipeline.runs import run_sequence
 
     render = RenderDir(episode_dir(Path(args.dir)))
-    out = Path(args.out) if args.out else default_output(render.root, "scanlines.npz")
+    out = Path(args.out) if args.out is not None else default_output(render.root, "scanlines.npz")
     n = len(render) if args.frames is None else min(args.frames, len(render))
+    height = people_height(render.root)             # before the frames: a bad people.csv stops at once
     pipe = Pipeline(render.cameras, params, render.background())
     with tqdm(total=n, desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
         result = run_sequence(pipe, (render.frames(i) for i in range(n)),
                               (render.labels(i) for i in range(n)), progress=lambda: bar.update())
     radii = {}
-    height = people_height(render.root)
     if height is not None:                          # where the cameras can see people at all
         (near, far), (gt_near, gt_far) = pipe.sight_range(height), pipe.sight_range(height, truth=True)
         radii = {"blind_radius": near, "sight_radius": far, "gt_blind_radius": gt_near, "gt_sight_radius": gt_far}
@@ -99,8 +99,11 @@ def people_height(root: Path) -> float | None:
 
         from scene import Scene
 
-        meta = json.loads((root / "meta.json").read_text())
-        if meta.get("scene_yaml"):
+        try:
+            meta = json.loads((root / "meta.json").read_text())
+        except ValueError as exc:
+            raise ValueError(f"{root / 'meta.json'}: not valid JSON ({exc})") from None
+        if isinstance(meta, dict) and meta.get("scene_yaml"):
             return float(Scene.from_text(meta["scene_yaml"], str(root / "meta.json")).people.height)
     return None
 
@@ -136,11 +139,14 @@ def _run_video(args, params) -> int:
     from pipeline.core import Pipeline
     from pipeline.io import iter_video_frames, load_calibration, save_npz_atomic
     from pipeline.runs import run_sequence
+    from testbed.output import check_output_file
 
     if args.background < 1:
         raise ValueError(f"--background: expected an integer >= 1, got {args.background}")
     cam = load_calibration(args.calibration)
-    source = Path(args.video)
+    source = Path(args.video).resolve()             # "." has a name once resolved
+    out = Path(args.out) if args.out is not None else \
+        check_output_file("--out", source.with_name(f"{source.stem}_scanlines.npz"))
     frames = iter_video_frames(source)
     bg = list(itertools.islice(frames, args.background))
     if len(bg) < args.background:
@@ -153,7 +159,6 @@ def _run_video(args, params) -> int:
     rest = (f[None] for f in itertools.islice(frames, args.frames))
     with tqdm(desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
         result = run_sequence(pipe, rest, progress=lambda: bar.update())
-    out = Path(args.out) if args.out else source.with_name(f"{source.stem}_scanlines.npz")
     save_npz_atomic(out, scanlines=result.scanlines, bearings=result.bearings,
                     camera_numbers=np.array([cam.number]))
     _report(result.metrics() | {"params": params.to_dict(), "out": str(out)}, [cam.number], args.json)

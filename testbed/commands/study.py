@@ -58,7 +58,7 @@ def run(args) -> int:
     check_seed(args.seed)
     if args.workers is not None and args.workers < 0:
         raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
-    if args.plot:
+    if args.plot is not None:
         check_output_file("--plot", args.plot, ".png")
     opts = mod.parse(args)
     from testbed.studies.core import TASKING_BACKEND
@@ -87,9 +87,9 @@ def run(args) -> int:
     else:
         print(mod.format_table(result))
     sys.stdout.flush()
-    if args.plot:
+    if args.plot is not None:
         mod.plot(result, args.plot)
     if not args.json:
         print(f"\n{args.study}: {args.trials} trials, seed {args.seed}, {elapsed:.1f} s"
-              + (f", plot {args.plot}" if args.plot else ""))
+              + (f", plot {args.plot}" if args.plot is not None else ""))
     return 0

@@ -38,7 +38,7 @@ def run(args) -> int:
     from pipeline.core import Pipeline
     from pipeline.io import RenderDir
     from pipeline.params import load_params
-    from pipeline.tuning import tune
+    from pipeline.tuning import outside_space, tune
     from testbed.cli import check_seed
     from testbed.commands.scanlines import default_output, episode_dir
     from testbed.output import check_output_file
@@ -48,11 +48,15 @@ def run(args) -> int:
     if args.frames < 1:
         raise ValueError(f"--frames: expected an integer >= 1, got {args.frames}")
     check_seed(args.seed)
-    if args.plot:
+    if args.plot is not None:
         check_output_file("--plot", args.plot, ".png")
     start = load_params(args.params)
+    for name, (value, low, high) in outside_space(start).items():
+        print(f"warning: --params: {name} {value:g} is outside the searched range {low:g}..{high:g}: the first "
+              "trial uses it, the others search the range (docs/pipeline.md)", file=sys.stderr)
     render = RenderDir(episode_dir(Path(args.dir)))
-    out = check_output_file("--out", args.out) if args.out else default_output(render.root, "tuned_params.yaml")
+    out = check_output_file("--out", args.out) if args.out is not None else \
+        default_output(render.root, "tuned_params.yaml")
     n = min(args.frames, len(render))
     background = render.background()
     frames = np.stack([render.frames(i) for i in range(n)])
@@ -71,7 +75,7 @@ def run(args) -> int:
         f"Tuned by `camtask tune {args.dir} --trials {args.trials} --seed {args.seed} --frames {n}"
         + (f" --params {args.params}" if args.params else "") + "`:\n"
         f"scanline F1 {result.best_f1:.4f} (starting parameters {result.baseline_f1:.4f})"))
-    if args.plot:
+    if args.plot is not None:
         plot_history(result.f1, args.plot)
     summary = {"best_f1": result.best_f1, "start_f1": result.baseline_f1, "trials": args.trials,
                "seed": args.seed, "frames": n, "params": result.best.to_dict(), "out": str(out)}

@@ -1,0 +1,32 @@
+"""YAML as people write numbers: ``1e-3`` and ``5E1`` are floats.
+
+PyYAML follows YAML 1.1, whose floats need a dot and a signed exponent, so it reads
+``1e-3`` (a float in YAML 1.2 and in every programming language) as the string
+``"1e-3"``. :class:`Loader` is PyYAML's safe loader (its libyaml binding when present)
+with one more implicit float rule for exponents without a dot or a sign; nothing that
+YAML 1.1 reads as a number reads otherwise.
+
+>>> load("a: 1e-3\\nb: 5E1\\nc: 10\\nd: 1.5\\ne: '2e3'\\nf: 1.0e3")
+{'a': 0.001, 'b': 50.0, 'c': 10, 'd': 1.5, 'e': '2e3', 'f': 1000.0}
+"""
+
+from __future__ import annotations
+
+import re
+
+import yaml
+
+
+class Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """The safe loader, with YAML 1.2's exponent floats (``1e-3``, ``5E1``, ``1.0e3``)."""
+
+
+Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."))
+
+
+def load(text: str):
+    """The document in ``text``, as :class:`Loader` reads it (raises yaml.YAMLError)."""
+    return yaml.load(text, Loader=Loader)
