@@ -77,17 +77,27 @@ class Pipeline:
         """(n_cams, width) float, radians, world-frame bearing of each scanline column."""
         return self.rectifier.bearings
 
-    def sight_range(self, object_height: float, truth: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    def sight_range(self, object_height: float, truth: bool = False,
+                    object_width: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Per camera, the floor distances (metres) between which an upright object of
-        ``object_height`` metres is sent as occupied: ``(near, far)``, each (n_cams,)
+        ``object_height`` metres (and ``object_width`` metres across: a person's diameter;
+        None for no width limit) is sent as occupied: ``(near, far)``, each (n_cams,)
         (:func:`pipeline.nearfield.sight_range`). A column is sent occupied when its
         smoothed count exceeds ``column_threshold``: a new object must show
         ``column_threshold / temporal_alpha`` rows, plus the opening's ``opening_kernel``;
-        with ``truth``, for the true scanlines (:meth:`ground_truth`), one row.
+        it must be wider than the opening's kernel in the raw image, and span ``spatial_kernel
+        + median_kernel // 2 + 1`` columns, so that a run survives the box and median
+        filters. With ``truth``, for the true scanlines (:meth:`ground_truth`): one row,
+        one column and one raw pixel.
         """
         p = self.params
-        margin = 1.0 if truth else p.column_threshold / p.temporal_alpha + p.opening_kernel
-        return sight_range(self.cameras, object_height, margin, self.rectifier.width)
+        if truth:
+            margin, columns, raw_columns = 1.0, 1.0, 1.0
+        else:
+            margin = p.column_threshold / p.temporal_alpha + p.opening_kernel
+            columns, raw_columns = p.spatial_kernel + p.median_kernel // 2 + 1, p.opening_kernel + 1
+        return sight_range(self.cameras, object_height, margin, self.rectifier.width, object_width,
+                           columns, raw_columns)
 
     @property
     def frame_shape(self) -> tuple[int, int, int]:

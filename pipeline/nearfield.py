@@ -29,6 +29,16 @@ hull keeps every object. A camera that sees no such distance has ``near = inf``.
 The object's top is what is seen first from above (the lab's people are cylinders with
 a flat top, whose top disc is drawn), and any floor point of it has its own vertical
 segment inside it: the rows counted are a lower bound of what its column shows.
+
+**Width.** Far away an object also becomes too narrow: the opening removes a blob
+narrower than its kernel, and the spatial and median filters a run of too few columns.
+An object ``w`` metres wide (a person's diameter) at floor distance ``d`` spans bearings
+``2 asin(w / 2d) >= w / d`` radians; a level virtual camera has at least ``f`` columns
+per radian (``f / (1 + x^2)`` radians per column), and the raw image at least
+:func:`raw_pixels_per_radian` pixels per radian in any row. So the object shows at least
+``columns`` rectified columns and ``raw_columns`` raw pixels per row out to
+``d = w f / columns`` and ``d = w g / raw_columns``: the sight radius is the smaller of
+these and the one of the rows.
 """
 
 from __future__ import annotations
@@ -39,7 +49,7 @@ from scene.checks import check_positive
 
 from .rectify import level_cameras, level_points
 
-__all__ = ["image_edge", "sight_range"]
+__all__ = ["image_edge", "raw_pixels_per_radian", "sight_range"]
 
 #: Points sampled along the raw image's upper and lower edges.
 EDGE_POINTS = 129
@@ -61,11 +71,25 @@ def image_edge(camera, K_virtual: np.ndarray, width: int, lower: bool = True) ->
     return np.interp(columns, x[order], y[order])
 
 
+def raw_pixels_per_radian(camera, rows: int = 33) -> float:
+    """The fewest raw-image pixels per radian of bearing along any row of ``camera``'s
+    image (lens distortion squeezes the periphery), from the level virtual camera's
+    bearing ``atan(x)`` at pixel edges on ``rows`` rows from top to bottom."""
+    us = np.arange(camera.width + 1) - 0.5
+    vs = np.linspace(0.0, camera.height - 1.0, rows)
+    uu, vv = np.meshgrid(us, vs)
+    x, _ = level_points(camera, np.stack([uu.ravel(), vv.ravel()], 1))
+    per_pixel = np.abs(np.diff(np.arctan(x).reshape(rows, -1), axis=1))     # radians per raw pixel
+    return float(1.0 / per_pixel.max())
+
+
 def sight_range(cameras, object_height: float, margin: float = 1.0,
-                width: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+                width: int | None = None, object_width: float | None = None,
+                columns: float = 1.0, raw_columns: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Per camera, the floor distances (metres) between which an upright object of
     ``object_height`` metres shows at least ``margin`` rows of the rectified image in
-    every column: ``(near, far)``, the blind and the sight radius.
+    every column (and, given ``object_width``, at least ``columns`` rectified columns and
+    ``raw_columns`` raw pixels across): ``(near, far)``, the blind and the sight radius.
 
     cameras : sequence of :class:`scene.Camera` (world frame: floor at z = 0)
     object_height : metres, > 0
@@ -73,6 +97,8 @@ def sight_range(cameras, object_height: float, margin: float = 1.0,
         output) the object must show to be sent: 1 for true masks, more for the
         pipeline's threshold (:meth:`pipeline.Pipeline.sight_range`)
     width : output width of the rectification (default the cameras')
+    object_width : metres (a person's diameter), or None for no width limit
+    columns, raw_columns : how many rectified columns and raw pixels across it must span
 
     Returns two (n_cams,) float arrays, metres: ``near`` (0 for a camera no higher than
     the object that sees the horizon; ``inf`` where the object is never seen) and
@@ -84,6 +110,10 @@ def sight_range(cameras, object_height: float, margin: float = 1.0,
     ([0.71], [1224.0])
     """
     object_height = check_positive("object_height", object_height)
+    if object_width is not None:
+        object_width = check_positive("object_width", object_width)
+        if not (columns > 0 and raw_columns > 0):
+            raise ValueError(f"columns, raw_columns: expected numbers > 0, got {columns}, {raw_columns}")
     margin = float(margin)
     if not (np.isfinite(margin) and margin >= 0):
         raise ValueError(f"margin: expected a number of rows >= 0, got {margin}")
@@ -111,6 +141,9 @@ def sight_range(cameras, object_height: float, margin: float = 1.0,
             lo = np.where(above & (room <= 0), np.inf, lo)
             hi = np.where(~above & (room < 0), np.minimum(hi, top / room), hi)   # both <= 0
         near[i], far[i] = float(np.max(lo)), float(np.min(hi))
+        if object_width is not None:                    # too narrow beyond these
+            far[i] = min(far[i], object_width * K[0, 0] / columns,
+                         object_width * raw_pixels_per_radian(camera) / raw_columns)
         if near[i] >= far[i]:
             near[i], far[i] = np.inf, np.inf
     return near, far

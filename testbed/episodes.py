@@ -323,8 +323,9 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     by_number = {c.number: k for k, c in enumerate(scene.cameras)}
     camera_xy = xy_all[[by_number[n] for n in numbers]]
     room = scene.room.polygon
-    near, far = pipe.sight_range(people.height)                      # metres: the pipeline's scanlines
-    gt_near, gt_far = pipe.sight_range(people.height, truth=True)    # the true ones
+    size = {"object_width": 2 * people.radius}
+    near, far = pipe.sight_range(people.height, **size)                 # metres: the pipeline's scanlines
+    gt_near, gt_far = pipe.sight_range(people.height, truth=True, **size)    # the true ones
 
     name = episode_name(index)
     tmp = temp_folder(out, f".{name}.")

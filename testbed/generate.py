@@ -45,10 +45,12 @@ LOCK = ".camtask-render.lock"
 PROBE = ".camtask-probe."
 #: 2: BLAKE3 checksums named by ``checksum``; 1: sha256, no ``checksum`` key (still resumable).
 FORMAT_VERSION = 2
-#: What an episode holds. 2: ``scanlines.npz`` has the blind radii and ``gt_hull.json`` is
-#: carved beyond them; 1 (manifests without ``episode_layout``): before. A run is not
-#: resumed across layouts: its episodes would differ in kind, not just in bytes.
-EPISODE_LAYOUT = 2
+#: What an episode holds. 3: the sight radii also hold where people become too narrow
+#: to be seen, and a tenth person's default colour is lime, not grey; 2: ``scanlines.npz``
+#: has the blind radii and ``gt_hull.json`` is carved beyond them; 1 (manifests without
+#: ``episode_layout``): before. A run is not resumed across layouts: its episodes would
+#: differ in kind, not just in bytes.
+EPISODE_LAYOUT = 3
 
 
 def write_json_atomic(path: Path, data: dict) -> None:

@@ -136,7 +136,8 @@ class LiveSource:
         self.pipes = {cam.number: Pipeline([cam], params, background=background[i:i + 1])
                       for i, cam in enumerate(scene.cameras)}
         self.bearings = {n: p.bearings[0] for n, p in self.pipes.items()}
-        ranges = {n: p.sight_range(scene.people.height) for n, p in self.pipes.items()}
+        ranges = {n: p.sight_range(scene.people.height, object_width=2 * scene.people.radius)
+                  for n, p in self.pipes.items()}
         self.near = {n: float(r[0][0]) for n, r in ranges.items()}   # blind radius, metres
         self.far = {n: float(r[1][0]) for n, r in ranges.items()}    # sight radius, metres
         self.rng = rng

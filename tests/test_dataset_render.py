@@ -34,7 +34,7 @@ def test_layout_and_manifest(dataset, lab):
     m = json.loads((dataset / "manifest.json").read_text())
     assert [e["name"] for e in m["episodes"]] == ["episode_0000", "episode_0001"]
     assert m["config"]["seed"] == 4 and m["config"]["frames"] == 2 and m["episodes_planned"] == 2
-    assert m["format_version"] == 2 and m["episode_layout"] == 2 and m["checksum"] == "blake3"
+    assert m["format_version"] == 2 and m["episode_layout"] == 3 and m["checksum"] == "blake3"
     for e in m["episodes"]:
         ep = dataset / e["name"]
         assert e["frames"] == 2 and e["spawn_key"] == [e["index"]] and e["seed"] == 4
@@ -664,5 +664,5 @@ def test_resume_refuses_the_episodes_of_an_earlier_layout(dataset, tmp_path, cap
     before = files_of(out)
     capsys.readouterr()
     assert main(ARGS + ["--episodes", "3", "--out", str(out), "--workers", "0", "--resume"]) == 2
-    assert "are of layout 1 (an earlier camtask), this camtask writes layout 2" in capsys.readouterr().err
+    assert "are of layout 1 (an earlier camtask), this camtask writes layout 3" in capsys.readouterr().err
     assert files_of(out) == before

@@ -235,3 +235,31 @@ def test_hulls_keep_people_beyond_what_steep_cameras_see(lab):
     assert max(d.difference(hull).area for d in discs) < 5e-5
     near_only = visual_hull_of_scanlines(xy, pipe.bearings, gt, room, near)
     assert max(d.difference(near_only).area for d in discs) > 0.1
+
+
+@pytest.mark.render
+def test_hulls_keep_people_too_thin_for_far_cameras_to_see(lab):
+    """People 6 cm across: beyond ~4.5 m they are narrower than the opening's kernel in the
+    raw image, so the pipeline sends them as empty. With the sight radii of their width,
+    every person keeps all but the edge columns' sliver; by height alone (18 m) a far camera
+    carves a whole person out."""
+    from render import Renderer
+    from scene import Scene
+    from scene.config import read_scene_text, scene_path
+
+    thin = Scene.from_text(read_scene_text(scene_path("lab")).replace("radius: 0.25 ", "radius: 0.03 "), "thin")
+    people = np.array([[3.35, 2.9], [1.0, 4.8], [5.9, 0.8]])
+    with Renderer(thin) as renderer:
+        pipe = Pipeline(thin.cameras, load_params(), background=renderer.background().rgb)
+        scans = pipe.process(renderer.render(people, rng=np.random.default_rng(0)).rgb)
+    xy, _, _ = thin.floor_poses()
+    discs = [Point(p).buffer(thin.people.radius, quad_segs=64) for p in people]
+    lost = {}
+    for width in (None, 2 * thin.people.radius):
+        near, far = pipe.sight_range(thin.people.height, object_width=width)
+        hull = visual_hull_of_scanlines(xy, pipe.bearings, scans, thin.room.polygon, near, far)
+        lost[width] = [d.difference(hull).area / d.area for d in discs]
+    assert max(lost[None]) > 0.9
+    assert max(lost[2 * thin.people.radius]) < 0.04
+    near, far = pipe.sight_range(thin.people.height, object_width=0.06)
+    assert np.allclose(far, far[0]) and 4.0 < far[0] < 5.0

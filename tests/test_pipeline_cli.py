@@ -181,6 +181,6 @@ def test_scanlines_records_the_blind_radii_of_the_shortest_person(render_dir, tm
     pipe = Pipeline(RenderDir(root).cameras, params)            # the calibration as the command read it
     with np.load(root / "scanlines.npz") as z:
         for prefix, truth in (("", False), ("gt_", True)):
-            near, far = pipe.sight_range(1.6, truth=truth)
+            near, far = pipe.sight_range(1.6, truth=truth, object_width=0.5)
             np.testing.assert_array_equal(z[f"{prefix}blind_radius"], near)
             np.testing.assert_array_equal(z[f"{prefix}sight_radius"], far)

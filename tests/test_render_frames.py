@@ -60,6 +60,20 @@ def test_frames_are_shaded_not_flat(lab, lab_renderer, three_people):
     assert f.rgb.shape == (1, 480, 640, 3) and f.rgb.dtype == np.uint8
 
 
+def test_every_default_colour_stands_out_from_the_room_by_colour_angle(lab_renderer):
+    """The pipeline is blind to brightness: a grey person (the palette's tenth, once) was
+    invisible against the grey room, and the hull lost them."""
+    from scene.config import default_colours
+
+    bg = lab_renderer.background().rgb.reshape(-1, 3).astype(float)
+    bg = bg[np.linalg.norm(bg, axis=1) > 25]                 # above the brightness floor
+    bg /= np.linalg.norm(bg, axis=1, keepdims=True)
+    colours = default_colours(10).astype(float)
+    colours /= np.linalg.norm(colours, axis=1, keepdims=True)
+    angles = np.degrees(np.arccos(np.clip(bg @ colours.T, -1, 1)))     # (pixels, 10)
+    assert angles.min(axis=0).min() > 20
+
+
 def test_background_has_no_people(lab, lab_renderer):
     bg = lab_renderer.background()
     assert bg.rgb.shape == (16, 480, 640, 3)

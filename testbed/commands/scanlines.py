@@ -69,14 +69,15 @@ def _run_render(args, params) -> int:
     render = RenderDir(episode_dir(Path(args.dir)))
     out = Path(args.out) if args.out is not None else default_output(render.root, "scanlines.npz")
     n = len(render) if args.frames is None else min(args.frames, len(render))
-    height = people_height(render.root)             # before the frames: a bad people.csv stops at once
+    size = people_size(render.root)                 # before the frames: a bad people.csv stops at once
     pipe = Pipeline(render.cameras, params, render.background())
     with tqdm(total=n, desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
         result = run_sequence(pipe, (render.frames(i) for i in range(n)),
                               (render.labels(i) for i in range(n)), progress=lambda: bar.update())
     radii = {}
-    if height is not None:                          # where the cameras can see people at all
-        (near, far), (gt_near, gt_far) = pipe.sight_range(height), pipe.sight_range(height, truth=True)
+    if size is not None:                            # where the cameras can see people at all
+        height, width = size
+        (near, far), (gt_near, gt_far) = (pipe.sight_range(height, truth=t, object_width=width) for t in (False, True))
         radii = {"blind_radius": near, "sight_radius": far, "gt_blind_radius": gt_near, "gt_sight_radius": gt_far}
     save_npz_atomic(out, scanlines=result.scanlines, gt_scanlines=result.gt_scanlines,
                     bearings=result.bearings, camera_numbers=np.array([c.number for c in render.cameras]), **radii)
@@ -85,15 +86,16 @@ def _run_render(args, params) -> int:
     return 0
 
 
-def people_height(root: Path) -> float | None:
-    """The height (metres) of the shortest person of a render directory: from its
-    people.csv, else (no one walked) from its meta.json's scene; None without either."""
+def people_size(root: Path) -> tuple[float, float] | None:
+    """The height and the diameter (metres) of the shortest and of the thinnest person of
+    a render directory: from its people.csv, else (no one walked) from its meta.json's
+    scene; None without either."""
     from testbed.dataset import read_people
 
     if (root / "people.csv").is_file():
-        heights = np.atleast_1d(read_people(root / "people.csv")["height"])
-        if heights.size:
-            return float(np.min(heights))
+        table = np.atleast_1d(read_people(root / "people.csv"))
+        if table.size:
+            return float(np.min(table["height"])), 2 * float(np.min(table["radius"]))
     if (root / "meta.json").is_file():
         import json
 
@@ -104,7 +106,8 @@ def people_height(root: Path) -> float | None:
         except ValueError as exc:
             raise ValueError(f"{root / 'meta.json'}: not valid JSON ({exc})") from None
         if isinstance(meta, dict) and meta.get("scene_yaml"):
-            return float(Scene.from_text(meta["scene_yaml"], str(root / "meta.json")).people.height)
+            people = Scene.from_text(meta["scene_yaml"], str(root / "meta.json")).people
+            return float(people.height), 2 * float(people.radius)
     return None
 
 

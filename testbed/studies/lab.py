@@ -63,7 +63,7 @@ def render_scanlines(scene, params, truth: np.ndarray, rng) -> tuple:
     with Renderer(scene) as renderer:
         pipe = Pipeline(scene.cameras, params, background=renderer.background().rgb)
         scans = np.stack([pipe.process(renderer.render(p, rng=rng).rgb) for p in truth])
-    return scans, pipe.bearings, *pipe.sight_range(scene.people.height)
+    return scans, pipe.bearings, *pipe.sight_range(scene.people.height, object_width=2 * scene.people.radius)
 
 
 def run_trial(trial: int, opts: dict, seed: int) -> dict:
