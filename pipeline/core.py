@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .foreground import AngleTerms, background_model, check_frames, open_stacked
+from .foreground import AngleTerms, background_model, check_frames, check_lit, open_stacked
 from .nearfield import sight_range
 from .params import PipelineParams
 from .rectify import Rectifier
@@ -107,12 +107,12 @@ class Pipeline:
     def set_background(self, frames) -> None:
         """Build the background model from empty-room frames (or a float32 model) and reset."""
         arr = np.asarray(frames)
+        numbers = [c.number for c in self.cameras]
         if arr.dtype == np.float32 and arr.ndim == 4:
             bg = arr
-            if not bg.reshape(len(bg), -1).any(axis=1).all():
-                raise ValueError("background: a camera's background is all black; expected the lit, empty room")
+            check_lit(bg, numbers)
         else:
-            bg = background_model(arr)
+            bg = background_model(arr, numbers)
         if bg.shape != self.frame_shape + (3,):
             n, h, w = self.frame_shape
             raise ValueError(f"background: expected shape ({n}, {h}, {w}, 3) to match the calibration, "

@@ -45,10 +45,11 @@ def check_frames(name: str, frames, shape: tuple | None = None) -> np.ndarray:
     return arr
 
 
-def background_model(frames) -> np.ndarray:
+def background_model(frames, numbers=None) -> np.ndarray:
     """Mean of empty-room frames.
 
     frames : (n_cams, H, W, 3) uint8, or (n_frames, n_cams, H, W, 3) uint8, RGB
+    numbers : the cameras' numbers, for the error (default their indices)
     Returns background : (n_cams, H, W, 3) float32, RGB, read-only.
     Raises if a camera's background is all black (the colour angle is then undefined).
     """
@@ -59,12 +60,21 @@ def background_model(frames) -> np.ndarray:
         raise ValueError("background: expected uint8 frames of shape (n_cams, H, W, 3) or "
                          f"(n_frames, n_cams, H, W, 3), got {arr.dtype} {tuple(arr.shape)}")
     bg = arr.mean(axis=0, dtype=np.float64).astype(np.float32)
-    black = ~bg.reshape(bg.shape[0], -1).any(axis=1)
-    if black.any():
-        raise ValueError(f"background: camera index {int(np.flatnonzero(black)[0])} is all black; "
-                         "expected an image of the lit, empty room")
+    check_lit(bg, numbers)
     bg.setflags(write=False)
     return bg
+
+
+def check_lit(background: np.ndarray, numbers=None) -> None:
+    """Raise naming the first camera (its number from ``numbers``, else its index) whose
+    ``background`` (n_cams, H, W, 3) is all black: the colour angle is then undefined (a
+    camera facing a wall a few centimetres away, or looking out of the lit room)."""
+    black = ~np.asarray(background).reshape(len(background), -1).any(axis=1)
+    if black.any():
+        i = int(np.flatnonzero(black)[0])
+        which = f"camera {numbers[i]}" if numbers is not None else f"camera index {i}"
+        raise ValueError(f"background: {which} sees all black; expected an image of the lit, empty room "
+                         "(is it facing a wall from a few centimetres, or looking out of the room?)")
 
 
 class AngleTerms:

@@ -54,6 +54,10 @@ def virtual_extent(camera: Camera) -> tuple[float, float, float, float]:
     per_side = 64
     x, y = level_points(camera, _border_points(camera.width, camera.height, per_side))
     left, right = x[2 * per_side:3 * per_side], x[3 * per_side:]
+    if right.min() <= left.max():
+        raise ValueError(f"camera {camera.number}: once turned level, no column of its image spans the image's whole "
+                         f"height (principal point {camera.K[0, 2]:g}, {camera.K[1, 2]:g} pixels far from the "
+                         "image's centre?); it cannot be rectified to a level camera")
     return float(left.max()), float(right.min()), float(y.min()), float(y.max())
 
 
@@ -65,14 +69,46 @@ def level_points(camera: Camera, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray
                                (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10))
     rays = np.concatenate([norm.reshape(-1, 2), np.ones((len(pts), 1))], 1) @ level_rotation(camera).T
     if np.any(rays[:, 2] <= 0.05):
-        raise ValueError(f"camera {camera.number}: field of view too wide to rectify to a level camera")
+        raise ValueError(f"camera {camera.number}: field of view too wide, or pitch too steep, to rectify to a level "
+                         "camera (every pixel must look less than 87 degrees from the level forward direction: "
+                         "check its pitch_deg, hfov_deg and distortion)")
     return rays[:, 0] / rays[:, 2], rays[:, 1] / rays[:, 2]
 
 
+#: How far (pixels) a pixel may land from itself when undistorted and distorted again.
+ROUND_TRIP = 0.5
+
+
+def check_lens(camera: Camera, samples: int = 33) -> None:
+    """Raise a one-line ValueError unless ``camera``'s lens distortion maps the rays it
+    sees one to one onto its image: every pixel (a grid of ``samples`` x ``samples``, the
+    edges included) undistorts to a ray that distorts back to it (within ``ROUND_TRIP``
+    pixels), and the radial factor ``r (1 + k1 r^2 + k2 r^4 + k3 r^6)`` grows out to
+    the farthest such ray. Coefficients that fold over inside the image (``k1 = -0.6`` on the
+    lab's 49-degree lens) would render rays twice (a "glass ball") and rectify nonsense."""
+    u = np.linspace(-0.5, camera.width - 0.5, samples)
+    v = np.linspace(-0.5, camera.height - 0.5, samples)
+    pts = np.stack(np.meshgrid(u, v), -1).reshape(-1, 1, 2)
+    norm = cv2.undistortPoints(pts, camera.K, camera.dist, None, None, None,
+                               (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10)).reshape(-1, 2)
+    back = cv2.projectPoints(np.column_stack([norm, np.ones(len(norm))]), np.zeros(3), np.zeros(3), camera.K,
+                             camera.dist)[0].reshape(-1, 2)
+    k1, k2, _, _, k3 = np.asarray(camera.dist, float).ravel()[:5]
+    r = np.linspace(0.0, 1.01 * float(np.hypot(norm[:, 0], norm[:, 1]).max()), 2001)
+    slope = 1 + 3 * k1 * r**2 + 5 * k2 * r**4 + 7 * k3 * r**6          # d/dr of the radial factor
+    miss = float(np.abs(back - pts.reshape(-1, 2)).max())
+    if miss > ROUND_TRIP or slope.min() <= 0:
+        raise ValueError(f"camera {camera.number}: its lens distortion {np.round(camera.dist, 4).tolist()} folds over "
+                         f"inside its image (a pixel undistorted and distorted again lands {miss:.1f} pixels away, "
+                         "or rays farther out come back nearer the centre); use smaller distortion coefficients")
+
+
 def check_rectifiable(cameras) -> None:
-    """Raise the one-line error of :func:`virtual_extent` for the first camera that cannot be
-    rectified to a level camera (before any work starts, rather than at the first frame)."""
+    """Raise the one-line error of :func:`check_lens` or :func:`virtual_extent` for the first
+    camera whose lens folds over or that cannot be rectified to a level camera (before any
+    work starts, rather than at the first frame)."""
     for camera in cameras:
+        check_lens(camera)
         virtual_extent(camera)
 
 

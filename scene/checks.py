@@ -70,7 +70,14 @@ def check_array(name: str, value: Any, shape: tuple[int | None, ...], *, dtype=f
 
     >>> check_array("xy", [[1, 2]], (None, 2)).shape
     (1, 2)
+    >>> check_array("xy", [["5", 4]], (None, 2))
+    Traceback (most recent call last):
+    ...
+    ValueError: xy: expected numbers of shape (n, 2), got '5'
     """
+    odd = _not_a_number(value)
+    if odd is not None:                         # "5" and true would convert without a word
+        raise ValueError(f"{name}: expected numbers of shape {_shape_text(shape)}, got {odd!r}")
     try:
         arr = np.asarray(value, dtype=dtype)
     except (TypeError, ValueError):
@@ -82,6 +89,15 @@ def check_array(name: str, value: Any, shape: tuple[int | None, ...], *, dtype=f
     if np.issubdtype(arr.dtype, np.floating) and not np.all(np.isfinite(arr)):
         raise ValueError(f"{name}: expected finite numbers, got NaN or infinity")
     return arr
+
+
+def _not_a_number(value: Any):
+    """The first boolean or string in nested lists (or an array of such), else None."""
+    if isinstance(value, np.ndarray):
+        return None if value.dtype.kind in "iuf" else next(iter(value.ravel()), None)
+    if isinstance(value, (list, tuple)):
+        return next((odd for odd in map(_not_a_number, value) if odd is not None), None)
+    return value if isinstance(value, (bool, np.bool_, str, bytes)) else None
 
 
 def check_mapping(name: str, value: Any, allowed: Iterable[str], required: Iterable[str] = ()) -> Mapping:

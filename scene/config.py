@@ -30,6 +30,9 @@ from .checks import (
 from .room import Room
 
 ASSETS = Path(__file__).resolve().parent.parent / "assets"
+#: The widest or tallest image, pixels: OpenGL renders into buffers of at most 16384 a
+#: side on llvmpipe, and every camera's image is drawn a little larger than itself.
+MAX_RESOLUTION = 8192
 BUILTIN_SCENES = ("lab", "circle")
 BACKENDS = ("egl", "osmesa")
 
@@ -203,8 +206,11 @@ def _parse_cameras(cfg: Any, room: Room) -> tuple:
     res = intr["resolution"]
     if not (isinstance(res, (list, tuple)) and len(res) == 2):
         raise ValueError(f"cameras.intrinsics.resolution: expected [width, height], got {res!r}")
-    width = check_int("cameras.intrinsics.resolution", res[0], minimum=1)
-    height = check_int("cameras.intrinsics.resolution", res[1], minimum=1)
+    width = check_int("cameras.intrinsics.resolution", res[0], minimum=2)    # a scanline needs 2 columns
+    height = check_int("cameras.intrinsics.resolution", res[1], minimum=2)
+    if max(width, height) > MAX_RESOLUTION:
+        raise ValueError(f"cameras.intrinsics.resolution: expected at most {MAX_RESOLUTION} pixels a side, "
+                         f"got {width} x {height}")
     hfov = _check_fov("cameras.intrinsics.hfov_deg", intr["hfov_deg"], maximum=179.0)
     dist = check_array("cameras.intrinsics.distortion", intr["distortion"], (5,))
     principal = intr.get("principal")
@@ -249,7 +255,7 @@ def _parse_ring(cfg: Any, room: Room) -> tuple:
 
 def _check_fov(name: str, value: Any, maximum: float) -> float:
     try:
-        deg = None if isinstance(value, bool) else float(value)
+        deg = None if isinstance(value, (bool, str, bytes)) else float(value)
     except (TypeError, ValueError):
         deg = None
     if deg is None or not 0 < deg <= maximum:

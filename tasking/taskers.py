@@ -60,6 +60,8 @@ __all__ = [
 ]
 
 TASKERS = ("uniform", "clustering", "optimal", "greedy", "lazy_greedy", "incremental")
+#: The optimal tasker refuses to compare more subsets of cameras than this (C(16, 8) = 12870).
+MAX_SUBSETS = 200_000
 
 #: Gains within this fraction of the room's area count as possibly equal in lazy greedy's
 #: staleness test (far above floating-point noise, far below any real gain difference).
@@ -372,7 +374,7 @@ def choose_cameras(
     current=None,
     m: int = 1,
     uniform_sets: Mapping | None = None,
-    max_subsets: int = 200_000,
+    max_subsets: int = MAX_SUBSETS,
     rng: np.random.Generator | None = None,
 ) -> np.ndarray:
     """Choose k of N cameras with one of :data:`TASKERS`.

@@ -89,6 +89,9 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, RunError) as exc:      # the machine, not the input: a full disk, a lost mount
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 1
+    except MemoryError as exc:              # NumPy's says how much it asked for ("Unable to allocate 45 GiB ...")
+        print(f"camtask {args.command}: error: out of memory ({exc or 'no details'})", file=sys.stderr)
+        return 1
     except Terminated:
         print(f"camtask {args.command}: terminated", file=sys.stderr)
         return 128 + signal.SIGTERM

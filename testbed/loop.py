@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 from collections import defaultdict
 from dataclasses import dataclass, field
+from math import comb
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from tasking import (
     prune_small,
     visual_hull_of_scanlines,
 )
+from tasking.taskers import MAX_SUBSETS
 from tasking.track_metrics import tracking_metrics
 from tasking.tracker import Tracker, TrackerParams
 
@@ -70,6 +72,9 @@ class LoopConfig:
         if m > k:
             raise ValueError(f"{name('m')}: expected at most k = {k}, got {m}")
         check_int(name("update_every"), self.update_every, minimum=1)
+        if self.tasker == "optimal" and comb(n_cameras, k) > MAX_SUBSETS:
+            raise ValueError(f"{name('tasker')}: optimal would compare C({n_cameras}, {k}) = {comb(n_cameras, k)} "
+                             f"subsets of cameras each frame, more than {MAX_SUBSETS}; choose greedy or incremental")
         return self
 
 

@@ -46,16 +46,19 @@ class VideoWriter:
             raise OSError(f"--video: ffmpeg stopped writing {self.path} ({type(exc).__name__})") from None
 
     def close(self, ok: bool = True) -> None:
-        if self._gen is not None:
-            self._gen.close()
-        # imageio-ffmpeg does not report ffmpeg's exit status: an empty file is a failure
-        wrote = self.tmp.exists() and self.tmp.stat().st_size > 0
-        if ok and self._gen is not None and wrote:
-            os.replace(self.tmp, self.path)
-            return
-        self.tmp.unlink(missing_ok=True)
-        if ok and self._gen is not None:
-            raise OSError(f"--video: ffmpeg wrote nothing to {self.path}")
+        """Finish the file (``ok``) or remove it; an interrupt while ffmpeg finishes removes it too."""
+        try:
+            if self._gen is not None:
+                self._gen.close()
+            # imageio-ffmpeg does not report ffmpeg's exit status: an empty file is a failure
+            wrote = self.tmp.exists() and self.tmp.stat().st_size > 0
+            if ok and self._gen is not None and wrote:
+                os.replace(self.tmp, self.path)
+                return
+            if ok and self._gen is not None:
+                raise OSError(f"--video: ffmpeg wrote nothing to {self.path}")
+        finally:
+            self.tmp.unlink(missing_ok=True)
 
     def __enter__(self):
         return self

@@ -111,6 +111,30 @@ def test_run_bad_input_is_one_line(capsys, argv, match):
     assert len(err) == 1 and match in err[0]
 
 
+def test_optimal_with_too_many_subsets_is_refused_before_the_first_frame():
+    """C(24, 12) subsets failed after the first frame, naming an internal parameter."""
+    assert LoopConfig("optimal", 8).check(16).k == 8                  # C(16, 8) = 12870
+    with pytest.raises(ValueError, match=r"--tasker: optimal would compare C\(24, 12\) = 2704156 subsets of "
+                                         r"cameras each frame, more than 200000; choose greedy or incremental"):
+        LoopConfig("optimal", 12).check(24, as_options=True)
+
+
+def test_a_run_too_long_for_memory_is_one_line(capsys):
+    assert main(["run", "lab", "--frames", str(10**12)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("camtask run: error: out of memory (Unable to allocate 43.7 TiB")
+
+
+@pytest.mark.parametrize("out, match", [
+    ("afile", "--out: {tmp}/afile exists and is not a folder"),
+    ("afile/sub", "--out: cannot make the folder {tmp}/afile/sub (Not a directory)"),
+])
+def test_demo_out_that_cannot_be_a_folder_is_named(tmp_path, capsys, out, match):
+    (tmp_path / "afile").write_text("x")
+    assert main(["demo", "--out", str(tmp_path / out)]) == 2
+    assert capsys.readouterr().err.strip() == "camtask demo: error: " + match.format(tmp=tmp_path)
+
+
 def test_run_refuses_the_circle_scene(capsys):
     assert main(["run", "circle"]) == 2
     assert "floor-plane cameras only" in capsys.readouterr().err
@@ -128,6 +152,31 @@ def test_run_end_to_end_json_and_video(tmp_path, capsys):
     assert {"residual", "bits_per_frame", "tracking"} <= set(doc["summary"])
     assert video.stat().st_size > 1000
     assert not list(tmp_path.glob(".*partial*"))
+    assert doc["summary"]["feedback"] == "hull" and doc["summary"]["near_field"] is True
+
+
+def test_ctrl_c_while_the_video_is_finished_leaves_no_partial_file(tmp_path):
+    """ffmpeg takes a moment to finish the file: an interrupt then left .run.partial.mp4."""
+    import numpy as np
+
+    from testbed.video import VideoWriter
+
+    class Interrupted:
+        """ffmpeg's generator, interrupted as it finishes the file."""
+
+        def __init__(self, gen):
+            self.gen = gen
+
+        def close(self):
+            self.gen.close()
+            raise KeyboardInterrupt
+
+    writer = VideoWriter(tmp_path / "run.mp4", fps=5)
+    writer.write(np.zeros((32, 32, 3), np.uint8))
+    writer._gen = Interrupted(writer._gen)
+    with pytest.raises(KeyboardInterrupt):
+        writer.close(ok=True)
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_run_json_is_strict_json_before_any_track_is_confirmed(tmp_path, capsys):

@@ -84,8 +84,13 @@ def test_bad_frames(frames, match):
 def test_bad_background():
     with pytest.raises(ValueError, match=r"background: expected shape \(1, 24, 32, 3\) to match"):
         Pipeline([cam()], background=np.full((1, 24, 30, 3), 9, np.uint8))
-    with pytest.raises(ValueError, match="background: camera index 0 is all black"):
+    # named by number: `camtask run` gives each camera a pipeline of its own, where the index is always 0
+    with pytest.raises(ValueError, match="background: camera 1 sees all black; expected an image of the lit"):
         Pipeline([cam()], background=np.zeros((1, 24, 32, 3), np.uint8))
+    with pytest.raises(ValueError, match="background: camera 1 sees all black"):
+        Pipeline([cam()], background=np.zeros((1, 24, 32, 3), np.float32))
+    with pytest.raises(ValueError, match="background: camera index 0 sees all black"):
+        background_model(np.zeros((1, 24, 32, 3), np.uint8))
     with pytest.raises(ValueError, match="background: expected uint8 frames"):
         background_model(np.zeros((1, 0, 32, 3), np.uint8))
     with pytest.raises(ValueError, match="background: not set"):
@@ -141,3 +146,27 @@ def test_the_camera_number_written_in_the_file_counts_over_its_name(tmp_path):
     (tmp_path / "cam07b.yaml").write_text(text.replace("camera_number: 5\n", ""))
     assert load_calibration(tmp_path / "cam07b.yaml").number == 7
     assert load_calibration(tmp_path / "cam07b.yaml", number=3).number == 3
+
+
+def lab_like(dist=(-0.18, 0.06, 0, 0, 0), principal=None):
+    c = scene.Camera.from_pose(3, [1.0, 0.05, 2.2], np.radians(90), np.radians(15), 640, 480, np.radians(49),
+                               list(dist))
+    if principal is not None:
+        K = c.K.copy()
+        K[:2, 2] = principal
+        c = scene.Camera(c.number, K, c.dist, c.R, c.t, c.width, c.height)
+    return c
+
+
+@pytest.mark.parametrize("camera, match", [
+    (lab_like((-0.6, 0, 0, 0, 0)), r"camera 3: its lens distortion \[-0.6, 0.0, 0.0, 0.0, 0.0\] folds over inside"),
+    (lab_like((0, 0, 0, 0, -3.0)), "camera 3: its lens distortion .* folds over inside its image"),
+    (lab_like(principal=(2000, 240)), "camera 3: once turned level, no column of its image spans the image's whole"),
+])
+def test_lenses_that_fold_over_or_cannot_be_levelled_are_refused_in_one_line(camera, match):
+    """They rendered rays twice ("a glass ball"), or asked OpenCV for 18 EB of maps."""
+    from pipeline.rectify import check_rectifiable
+
+    check_rectifiable([lab_like()])              # the lab's own lens
+    with pytest.raises(ValueError, match=match):
+        check_rectifiable([camera])

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from pathlib import Path
@@ -32,10 +31,7 @@ def run(args: argparse.Namespace) -> int:
                             near_field=True,
                             frames=args.frames, people=3, params=None, seed=args.seed, video=None)
     scene, config, params, truth, rng = prepare(ns)     # checks the arguments
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    if not os.access(out, os.W_OK):
-        raise ValueError(f"--out: folder {out} is not writable")
+    out = check_out_folder(args.out)
     t0 = time.perf_counter()
     results, summary, bearings = execute(scene, config, params, truth, rng, out / "run.mp4")
     summary["seed"] = args.seed             # no wall-clock time: same seed, same bytes
@@ -51,3 +47,15 @@ def run(args: argparse.Namespace) -> int:
           f"({seconds} s)", file=sys.stderr)
     return 0
 
+
+def check_out_folder(path: str) -> Path:
+    """``--out`` as a folder that exists or is made, where files can be created, outside
+    any dataset's episode; else a one-line ValueError naming ``--out``."""
+    from testbed.output import check_output_file
+
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out: {out} exists and is not a folder")
+    check_output_file("--out", out / "summary.json")     # its folder: made, writable, not in an episode
+    out.mkdir(parents=True, exist_ok=True)
+    return out

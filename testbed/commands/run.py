@@ -106,12 +106,15 @@ def execute(scene, config, params, truth, sensor_rng, video=None):
             results.append(r)
         ok = True
     finally:
-        source.close()
-        if writer:
-            writer.close(ok=ok)
+        try:
+            source.close()
+        finally:                                # an interrupt in source.close() must not keep the partial video
+            if writer:
+                writer.close(ok=ok)
     summary = summarise(results, scene)
     summary.update(tasker=config.tasker, k=config.k, m=config.m, update_every=config.update_every,
-                   near_field=config.near_field, people=scene.people.count, scene=scene.name)
+                   feedback=config.feedback, near_field=config.near_field, people=scene.people.count,
+                   scene=scene.name)
     return results, summary, source.bearings
 
 
