@@ -61,15 +61,33 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     """
     # imported here: scikit-learn's import is ~1 s of every command's start
     from sklearn.cluster import KMeans
+    from threadpoolctl import threadpool_limits
 
     feats = np.c_[np.cos(2 * axes), np.sin(2 * axes)]
     distinct = np.unique(np.round(feats, 12), axis=0).shape[0]
     c = min(k, distinct)
-    km = KMeans(n_clusters=c, n_init=10, random_state=seed).fit(feats)
+    with threadpool_limits(limits=1):           # the same sums whatever the machine's threads
+        km = KMeans(n_clusters=c, n_init=10, random_state=seed).fit(feats)
     centres = (np.arctan2(km.cluster_centers_[:, 1], km.cluster_centers_[:, 0]) / 2) % np.pi
     sizes = np.bincount(km.labels_, minlength=c)
     order = np.lexsort((centres, -sizes))
-    return centres[order], sizes[order]
+    centres, sizes = centres[order], sizes[order]
+    if _closed_under_quarter_turn(axes):
+        # every axis has its perpendicular: each solution has a twin turned by pi / 2, of
+        # equal inertia, and rounding chose between them (with 1 or 2 OpenMP threads, other
+        # cameras): take the one whose centres come first, largest cluster first
+        twin = (centres + np.pi / 2) % np.pi
+        order = np.lexsort((twin, -sizes))
+        if tuple(np.round(twin[order], 9)) < tuple(np.round(centres, 9)):
+            centres, sizes = twin[order], sizes[order]
+    return centres, sizes
+
+
+def _closed_under_quarter_turn(axes: np.ndarray) -> bool:
+    """Whether the axial angles (radians modulo pi) turned by pi / 2 are the same multiset."""
+    a = np.sort(np.round(np.asarray(axes, float) % np.pi, 9) % np.round(np.pi, 9))
+    b = np.sort(np.round((np.asarray(axes, float) + np.pi / 2) % np.pi, 9) % np.round(np.pi, 9))
+    return a.shape == b.shape and bool(np.allclose(a, b, atol=1e-8))
 
 
 def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:

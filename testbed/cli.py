@@ -9,6 +9,7 @@ Library code never reads argv; only this module does.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import signal
@@ -86,6 +87,10 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, UsageError, FileNotFoundError, FileExistsError) as exc:
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:                 # `camtask study ... | head`: the reader has all it wants
+        with contextlib.suppress(OSError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # no second error at exit
+        return 128 + signal.SIGPIPE
     except (OSError, RunError) as exc:      # the machine, not the input: a full disk, a lost mount
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 1

@@ -57,3 +57,16 @@ def test_ctrl_c_while_pyrender_imports_is_not_swallowed():
             pass
         reached.append(True)
     assert reached == [True] and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_reader_that_stops_reading_ends_the_command_quietly(monkeypatch, capsys):
+    """`camtask study ... | head`: printed "error: [Errno 32] Broken pipe" and exited 1."""
+    import signal
+
+    from testbed.commands import study
+
+    def stopped_reading(args):
+        raise BrokenPipeError(32, "Broken pipe")
+    monkeypatch.setattr(study, "run", stopped_reading)
+    assert cli.main(["study", "cameras"]) == 128 + signal.SIGPIPE
+    assert capsys.readouterr().err == ""

@@ -106,12 +106,24 @@ def test_seed_changes_numbers(capsys):
     (("static", "--k", "1-3000000"), "--k: a range of at most 100000 values, got '1-3000000'"),
     (("cameras", "--cameras", "2,4,8", "--limit-cameras", "8"),
      "--limit-cameras: expected more cameras than the largest --cameras (8), got 8"),
+    # these failed after minutes of trials, naming an internal parameter
+    (("static", "--candidates", "22"), "--taskers: optimal would compare C(22, 8) = 319770 subsets of cameras per "
+                                       "trial, more than --max-subsets 200000"),
+    (("static", "--plot", ""), "--plot: expected a file name, got ''"),
 ])
 def test_bad_input_is_one_line(capsys, argv, message):
     assert cli.main(["study", *argv, "--workers", "0", "--no-progress"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("camtask study: error: ") and message in err
     assert "\n" not in err
+
+
+def test_m_is_incremental_greedys_alone(capsys):
+    """--m larger than a greedy k stopped the run inside a worker ("m must be <= 2")."""
+    for argv in (("moving", "--k", "2,4", "--m", "3", "--taskers", "uniform,greedy", "--steps", "3"),
+                 ("tracking", "--pairs", "greedy:3,uniform:4", "--m", "5", "--steps", "5")):
+        assert cli.main(["study", *argv, "--trials", "1", "--workers", "0", "--no-progress"]) == 0
+    capsys.readouterr()
 
 
 def test_unreachable_scheduler_fails_fast(capsys):

@@ -93,8 +93,8 @@ def run_trials(start, stop, opts, seed) -> np.ndarray:
             total = 0.0
             for f in range(1, opts["steps"]):
                 if tasker != "uniform" and (f - 1) % u == 0 and len(est):
-                    S = core.choose_cameras(tasker, k, xy, yaw, core.FOV, est, r, room,
-                                            current=S, m=opts["m"])
+                    S = core.choose_cameras(tasker, k, xy, yaw, core.FOV, est, r, room,   # --m: incremental's
+                                            current=S, m=opts["m"] if tasker == "incremental" else 1)
                 _, res, polys = core.hull_residual(xy[S], yaw[S], traj[f], r, room)
                 total += res
                 if polys:
@@ -159,6 +159,10 @@ def plot(result: dict, path: str) -> None:
                 xlabel="number of cameras tasked k")
     for ax in axes:
         ax.set_yscale("log")
-        ax.legend()
+        if ax.has_data():
+            ax.legend()
+        else:                                   # fig. 10 needs incremental or uniform among --taskers
+            ax.text(0.5, 0.5, "no incremental or uniform\nin --taskers", ha="center", va="center",
+                    transform=ax.transAxes, color="grey")
     fig.tight_layout()
     save_figure(fig, path)

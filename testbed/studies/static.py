@@ -8,6 +8,8 @@ object) is averaged over trials. All taskers and k see the same drops.
 
 from __future__ import annotations
 
+from math import comb
+
 import numpy as np
 
 from . import core
@@ -36,6 +38,11 @@ def parse(args) -> dict:
     if max(ks) > args.candidates:
         raise ValueError(f"--k: {max(ks)} cameras exceed the {args.candidates} candidates")
     taskers = core.parse_names("taskers", args.taskers, [t for t in core.TASKERS if t != "incremental"])
+    worst = max(ks, key=lambda k: comb(args.candidates, k))
+    if "optimal" in taskers and comb(args.candidates, worst) > args.max_subsets:
+        raise ValueError(f"--taskers: optimal would compare C({args.candidates}, {worst}) = "
+                         f"{comb(args.candidates, worst)} subsets of cameras per trial, more than --max-subsets "
+                         f"{args.max_subsets}")
     if not 0 < args.radius < 0.5:
         raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
     return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),

@@ -104,8 +104,8 @@ def run_episode(tasker: str, k: int, opts: dict, seed: int, trial: int) -> dict:
             estimates = tracker.estimates()
         if tasker != "uniform" and (t + 1) % opts["update_every"] == 0 and len(estimates):
             current = chosen if tasker == "incremental" else None
-            chosen = core.choose_cameras(tasker, k, xy, yaw, core.FOV, estimates, r, room,
-                                         current=current, m=opts["m"])
+            chosen = core.choose_cameras(tasker, k, xy, yaw, core.FOV, estimates, r, room,   # --m: incremental's
+                                         current=current, m=opts["m"] if tasker == "incremental" else 1)
     gt_ids = [np.arange(opts["objects"])] * opts["steps"]
     metrics = tracking_metrics(gt_ids, list(truth), track_ids, track_xy, max_distance=params.gate)
     return {**metrics, "truth": truth, "track_ids": track_ids, "track_xy": track_xy}
