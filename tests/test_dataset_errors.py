@@ -41,8 +41,8 @@ def test_bad_scene_file(tmp_path, capsys):
     # passes the scene's own checks, but its image cannot be rectified to a level camera
     (lambda c: (c["cameras"]["poses"][1].update(pitch_deg=60.0),
                 c["cameras"]["intrinsics"].update(hfov_deg=60.0, distortion=[-0.3, 0.1, 0, 0, 0])),
-     "camera 2: field of view too wide, or pitch too steep, to rectify to a level camera (every pixel must look "
-     "less than 87 degrees from the level forward direction: check its pitch_deg, hfov_deg and distortion)"),
+     ("camera 2: field of view too wide, or pitch too steep, to rectify to a level camera (every pixel must look "
+     "less than 87 degrees from the level forward direction: check its pitch_deg, hfov_deg and distortion)")),
     (lambda c: c["people"].update(count=17, radius=0.1),
      "people.count: silhouettes store one bit per person in a 16-bit PNG; expected at most 16, got 17"),
 ])

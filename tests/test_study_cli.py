@@ -83,6 +83,10 @@ def test_same_numbers_with_two_workers(capsys):
     c = run_json(capsys, *MOVING, "--workers", "0")
     d = run_json(capsys, *MOVING, "--workers", "2")
     assert c["records"] == d["records"]
+    # clustering's k-means: the same twin in this process (OpenMP threads) as in a worker (one)
+    clustering = ("static", "--k", "3", "--taskers", "clustering", "--trials", "4")
+    assert run_json(capsys, *clustering, "--workers", "0")["records"] == \
+        run_json(capsys, *clustering, "--workers", "2")["records"]
 
 
 def test_seed_changes_numbers(capsys):
@@ -107,8 +111,8 @@ def test_seed_changes_numbers(capsys):
     (("cameras", "--cameras", "2,4,8", "--limit-cameras", "8"),
      "--limit-cameras: expected more cameras than the largest --cameras (8), got 8"),
     # these failed after minutes of trials, naming an internal parameter
-    (("static", "--candidates", "22"), "--taskers: optimal would compare C(22, 8) = 319770 subsets of cameras per "
-                                       "trial, more than --max-subsets 200000"),
+    (("static", "--candidates", "22"), ("--taskers: optimal would compare C(22, 8) = 319770 subsets of cameras per "
+                                       "trial, more than --max-subsets 200000")),
     (("static", "--plot", ""), "--plot: expected a file name, got ''"),
 ])
 def test_bad_input_is_one_line(capsys, argv, message):
