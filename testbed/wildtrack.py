@@ -179,6 +179,8 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
     from testbed.dataset import read_calibration
     from testbed.parallel import default_workers
 
+    if layout not in LAYOUTS:
+        raise ValueError(f"layout: expected one of {', '.join(LAYOUTS)}, got {layout!r}")
     lay = LAYOUTS[layout]
     if box not in BOXES:
         raise ValueError(f"box: expected one of {', '.join(BOXES)}, got {box!r}")
