@@ -65,6 +65,7 @@ class Pipeline:
         self._terms: AngleTerms | None = None
         self._state = None
         self._truth = None                     # process_with_truth's buffer, made on first use
+        self._ranges: dict = {}                # sight_range's results, by its arguments
         if background is not None:
             self.set_background(background)
 
@@ -90,14 +91,20 @@ class Pipeline:
         filters. With ``truth``, for the true scanlines (:meth:`ground_truth`): one row,
         one column and one raw pixel.
         """
-        p = self.params
-        if truth:
-            margin, columns, raw_columns = 1.0, 1.0, 1.0
-        else:
-            margin = p.column_threshold / p.temporal_alpha + p.opening_kernel
-            columns, raw_columns = p.spatial_kernel + p.median_kernel // 2 + 1, p.opening_kernel + 1
-        return sight_range(self.cameras, object_height, margin, self.rectifier.width, object_width,
-                           columns, raw_columns)
+        key = (float(object_height), bool(truth), None if object_width is None else float(object_width))
+        if key not in self._ranges:         # ~8 ms a camera with a width: once per pipeline, not per episode
+            p = self.params
+            if truth:
+                margin, columns, raw_columns = 1.0, 1.0, 1.0
+            else:
+                margin = p.column_threshold / p.temporal_alpha + p.opening_kernel
+                columns, raw_columns = p.spatial_kernel + p.median_kernel // 2 + 1, p.opening_kernel + 1
+            near, far = sight_range(self.cameras, object_height, margin, self.rectifier.width, object_width,
+                                    columns, raw_columns)
+            near.setflags(write=False)
+            far.setflags(write=False)
+            self._ranges[key] = near, far
+        return self._ranges[key]
 
     @property
     def frame_shape(self) -> tuple[int, int, int]:
