@@ -171,7 +171,11 @@ def cylinder(radius: float, height: float, colour, person: int, lighting: Lighti
 
     Bands from the floor: legs (clothing, darker), torso (clothing), head (skin), and a
     hair-coloured top cap. Side normals are radial, so the shading varies smoothly
-    around the body.
+    around the body. A bottom cap (legs' colour, facing the floor, last in the mesh)
+    closes it: no camera above the floor ever sees it from outside, but a camera inside
+    the person must not see the floor through it (docs/render.md). It lies a
+    thousandth of the height above the floor, so that it does not tie with the floor
+    in depth.
     """
     colour = np.asarray(colour, float)
     head = min(0.25, 0.2 * height)
@@ -193,6 +197,10 @@ def cylinder(radius: float, height: float, colour, person: int, lighting: Lighti
     pts.append(np.column_stack([cap, np.full(len(cap), height)]))
     normals.append(np.tile([0.0, 0.0, 1.0], (len(cap), 1)))
     cols.append(np.tile(HAIR, (len(cap), 1)))
+    sole = np.stack([np.zeros((segments, 2)), ring[1:], ring[:-1]], axis=1).reshape(-1, 2) * radius
+    pts.append(np.column_stack([sole, np.full(len(sole), 1e-3 * height)]))
+    normals.append(np.tile([0.0, 0.0, -1.0], (len(sole), 1)))
+    cols.append(np.tile(bands[0][2], (len(sole), 1)))
     pts, normals, cols = np.concatenate(pts), np.concatenate(normals), np.concatenate(cols)
     return Mesh(pts.astype(np.float32), _shade(cols, pts, normals, lighting).astype(np.float32),
                 np.full(len(pts), float(person), np.float32))

@@ -7,8 +7,9 @@ down so that ``glReadPixels`` returns rows top first, and one ``glReadPixels`` r
 all cameras at once into a preallocated ``(n_cams, H, W, 4)`` array: RGB is the baked
 vertex colour, interpolated across the triangle; alpha is the exact label (person
 index + 1, 0 for the room), written from a ``flat`` varying. No lighting, no MSAA, no
-blending. The people's back faces are culled (:meth:`Rasteriser._draw_range`);
-the room's faces are all drawn.
+blending. The people's back faces are culled (:meth:`Rasteriser._draw_range`),
+except for the cameras a person comes within the near plane of or encloses (``near``),
+which draw them unclipped by the near plane; the room's faces are all drawn.
 
 :meth:`Rasteriser.draw` draws everything (the room, the benchmark floor, the tests'
 reference). The renderer's steps use :meth:`Rasteriser.draw_people`: a copy of the
@@ -138,7 +139,7 @@ class Rasteriser:
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
 
     def draw(self, view_projs: np.ndarray, offsets_xy: np.ndarray, read: bool = True,
-             bands=None) -> np.ndarray:
+             bands=None, near=None) -> np.ndarray:
         """Draw every camera's ideal canvas and (with ``read``) read the pixels back.
 
         view_projs : (n, 4, 4) float, projection @ view per camera, n <= n_tiles
@@ -147,6 +148,9 @@ class Rasteriser:
             drawn in (default 0..n-1); only those bands are cleared and read. A camera
             always drawn in the same band gives bit-identical pixels wherever the scene
             is the same (the renderer relies on it to reuse its cached background).
+        near : (n,) bool, the cameras a person may come within the near plane of (or
+            enclose): their people are drawn with back faces and without near clipping
+            (:meth:`_draw_range`); default none
         Returns (n, H, W, 4) uint8, rows top first: RGB and the label in alpha. Band b is
         read into ``self.pixels[b]`` (the result is a view of it when the bands are
         consecutive): it is reused by the next call that reads band b, copy what you keep.
@@ -178,7 +182,8 @@ class Rasteriser:
         # every camera's room, then every camera's people: the bands are disjoint, so each
         # camera still gets its room before its people
         self._draw_range(GL, vp, bands, 0, self.people_first)
-        self._draw_range(GL, vp, bands, self.people_first, self.n_vertices - self.people_first, cull=True)
+        self._draw_range(GL, vp, bands, self.people_first, self.n_vertices - self.people_first, cull=True,
+                         near=near)
         if not read:
             GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
             return None
@@ -197,28 +202,44 @@ class Rasteriser:
         return out
 
     def _draw_range(self, GL, view_projs: np.ndarray, bands, first: int, count: int,
-                    cull: bool = False) -> None:
+                    cull: bool = False, near=None) -> None:
         """Draw vertices ``first .. first + count`` once per camera, camera k in band ``bands[k]``.
 
         cull : cull back faces (for the people's triangles; with :attr:`cull_back_faces`).
-        A person is a closed convex surface for every camera above the floor (the open
-        bottom faces the floor), so a back face's fragment always lies behind a front face's
-        at the same pixel: culling the back faces leaves every covered pixel and label as
-        it was, and llvmpipe rasterises ~40 % fewer triangles (the side's far half). Only
+        A person is a closed convex surface (:func:`render.geometry.cylinder`), so for a
+        camera outside it a back face's fragment always lies behind a front face's at
+        the same pixel: culling the back faces leaves every covered pixel and label as it
+        was, and llvmpipe rasterises ~40 % fewer triangles (the side's far half). Only
         where a front and a back face tie in depth on the outline does the front face's
         colour now win, as a camera would see it. Front faces are set in :meth:`_state`.
+        near : (n,) bool or None; for camera k with ``near[k]`` (a person may reach
+            within its near plane, or enclose it) the back faces are drawn and nothing
+            is clipped at the near (or far) plane: depth is clamped instead
+            (``GL_DEPTH_CLAMP``), so a surface nearer than the near plane is drawn at
+            depth 0, in front of the room, and a camera inside a person, which faces
+            only back faces, sees that person all round, as a real lens behind someone's
+            back sees them and nothing else.
         """
         if count == 0:
             return
-        if cull and self.cull_back_faces:
+        near = _flags(near, len(bands))
+        culling = cull and self.cull_back_faces
+        if culling:
             GL.glEnable(GL.GL_CULL_FACE)
+        clamped = False
         try:
             for k, b in enumerate(bands):
+                if cull and near[k] != clamped:          # toggle only where it changes
+                    clamped = bool(near[k])
+                    (GL.glEnable if clamped else GL.glDisable)(GL.GL_DEPTH_CLAMP)
+                    if culling:
+                        (GL.glDisable if clamped else GL.glEnable)(GL.GL_CULL_FACE)
                 GL.glViewport(0, int(b) * self.height, self.width, self.height)
                 GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, view_projs[k])
                 GL.glDrawArrays(GL.GL_TRIANGLES, first, count)
         finally:
             GL.glDisable(GL.GL_CULL_FACE)
+            GL.glDisable(GL.GL_DEPTH_CLAMP)
 
     def _state(self, GL) -> None:
         """The fixed pipeline state of every pass (bound program, VAO and framebuffer)."""
@@ -227,6 +248,7 @@ class Rasteriser:
         GL.glBindVertexArray(self.vao)
         GL.glDisable(GL.GL_BLEND)
         GL.glDisable(GL.GL_CULL_FACE)
+        GL.glDisable(GL.GL_DEPTH_CLAMP)
         GL.glFrontFace(GL.GL_CW)          # meshes wind counter-clockwise seen from outside,
         GL.glCullFace(GL.GL_BACK)         # and the projection flips rows (flip_rows)
         GL.glDisable(GL.GL_MULTISAMPLE)
@@ -274,7 +296,7 @@ class Rasteriser:
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
 
     def draw_people(self, view_projs: np.ndarray, offsets_xy: np.ndarray, bands, rects,
-                    out: np.ndarray) -> None:
+                    out: np.ndarray, near=None) -> None:
         """Draw only the people over the stored room, inside ``rects``, and read those back.
 
         view_projs : (n, 4, 4) float, projection @ view per camera
@@ -285,6 +307,7 @@ class Rasteriser:
             drawn, nothing read)
         out : (n_tiles, H, W, 4) uint8, C-contiguous; each of band b's rectangles is read
             into ``out[b, y0:y1, x0:x1]``, the rest of ``out`` is left alone
+        near : (n,) bool, as in :meth:`draw` (default none)
 
         Per camera: the room's colour and depth are copied (``glBlitFramebuffer``) from
         the stored room into each rectangle, then only the people's triangles are drawn.
@@ -302,6 +325,7 @@ class Rasteriser:
                              f"{len(view_projs)}, {len(bands)}, {len(rects)}")
         if out.shape != self.pixels.shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
             raise ValueError(f"out: expected a C-contiguous uint8 array of shape {self.pixels.shape}")
+        near = _flags(near, len(bands))
         todo = [k for k in range(len(bands)) if len(rects[k])]
         if not todo:
             return
@@ -319,7 +343,7 @@ class Rasteriser:
         self._set_offsets(GL, offsets_xy)
         vp = np.ascontiguousarray(view_projs, np.float32)
         self._draw_range(GL, vp[todo], bands[todo], self.people_first, self.n_vertices - self.people_first,
-                         cull=True)
+                         cull=True, near=near[todo])
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, self.width)
         GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
@@ -351,6 +375,14 @@ class Rasteriser:
             GL.glDeleteProgram(self.program)
         finally:
             self.program = None
+
+
+def _flags(near, n: int) -> np.ndarray:
+    """``near`` as (n,) bool, all False for None."""
+    near = np.zeros(n, bool) if near is None else np.asarray(near, bool).reshape(-1)
+    if len(near) != n:
+        raise ValueError(f"near: expected one flag per camera ({n}), got {len(near)}")
+    return near
 
 
 def _texture(GL, internal, width, height, fmt, dtype, data, filtering):

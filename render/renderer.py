@@ -154,6 +154,11 @@ class Renderer:
                              zip(self.cameras, (self.maps[i] for i in self.map_index))])
         self._R = np.stack([np.asarray(c.R, float) for c in self.cameras])
         self._t = np.stack([np.asarray(c.t, float).reshape(3) for c in self.cameras])
+        self._centre = np.stack([np.asarray(c.center_world, float) for c in self.cameras])
+        # how far from the lens the near plane reaches inside the canvas frustum, metres
+        corners = np.array([[-0.5, -0.5], [cw - 0.5, -0.5], [-0.5, ch - 0.5], [cw - 0.5, ch - 0.5]])
+        rays = (corners[None] - self._Kc[:, None, :2, 2]) / self._Kc[:, None, [0, 1], [0, 1]]
+        self._reach = ZNEAR * np.sqrt(1.0 + (rays**2).sum(axis=-1)).max(axis=1)      # (n_cams,)
         self._rgba = np.empty((self.height, self.width, 4), np.uint8)   # scratch
         self._alpha = np.zeros((ch, cw), np.uint8)                      # idem, kept all 0
         self._pool = None
@@ -215,7 +220,8 @@ class Renderer:
             gains, offsets = draw_gains_offsets(n, s.gain_jitter, rng)
             if s.noise_std > 0:
                 pool = self._noise_pool()
-        rects = self._rects(idx, pos)
+        close = self._close(idx, pos)
+        rects = self._rects(idx, pos, close)
         regions = regions_of(self._block_lo[idx], self._block_hi[idx], rects, (H, W))
         rgb = np.empty((n, H, W, 3), np.uint8) if colour else None
         labels = np.zeros((n, H, W), np.uint8)
@@ -223,7 +229,7 @@ class Renderer:
         boxes = [_boxes(r, self.canvas_size) for r in rects]
         work = self._work
         try:
-            self._draw_people(idx, pos, boxes)
+            self._draw_people(idx, pos, boxes, close.any(axis=1))
             for k, i in enumerate(idx):
                 noise = None if pool is None else pool[offsets[k]:offsets[k] + H * W * 3].reshape(H, W * 3)
                 self._finish(int(i), work[i], boxes[k], regions[k], background.rgb[i],
@@ -234,7 +240,7 @@ class Renderer:
                     work[i, y0:y1, x0:x1] = self._canvas[i, y0:y1, x0:x1]
         return rgb, labels
 
-    def _draw_people(self, idx: np.ndarray, pos: np.ndarray, boxes: list) -> None:
+    def _draw_people(self, idx: np.ndarray, pos: np.ndarray, boxes: list, near=None) -> None:
         """Draw the people over the room inside their canvas ``boxes``, into ``self._work``.
 
         boxes : per camera, the integer slice bounds (x0, y0, x1, y1), end exclusive, of
@@ -243,8 +249,10 @@ class Renderer:
         cached room canvas outside ``boxes[k]``, inside the people drawn over the room's
         own colour and depth (:meth:`Rasteriser.draw_people`), bit for bit what a
         whole-scene draw gives. The caller restores the boxes from ``self._canvas``.
+        near : (n,) bool, the cameras a person comes close to (:meth:`_close`): their
+            people are drawn with back faces, unclipped by the near plane
         """
-        self.raster.draw_people(self.view_projs[idx], pos, idx, boxes, self._work)
+        self.raster.draw_people(self.view_projs[idx], pos, idx, boxes, self._work, near)
 
     def _finish(self, i: int, canvas: np.ndarray, boxes: list, regions: list, background: np.ndarray,
                 rgb: np.ndarray | None, labels: np.ndarray, gain: float | None,
@@ -281,15 +289,33 @@ class Renderer:
             self._pool = noise_pool(float(self.scene.render.noise_std), self.height * self.width * 3)
         return self._pool
 
-    def _rects(self, idx: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    def _close(self, idx: np.ndarray, pos: np.ndarray) -> np.ndarray:
+        """(n, people) bool: the person's cylinder comes within the near plane's reach of
+        camera ``idx[k]``'s lens, or holds it.
+
+        Only then can the near plane cut the person inside the view, or the camera face
+        the person's back faces alone: such a camera's people are drawn with their back
+        faces and clamped, not clipped, at the near plane (:meth:`Rasteriser._draw_range`).
+        The reach is the distance from the lens to the near plane's farthest corner
+        (~6 cm for the lab); the mesh lies inside the cylinder, so the test is safe.
+        """
+        people = self.scene.people
+        c = self._centre[idx][:, None]                                  # (n, 1, 3)
+        with np.errstate(invalid="ignore"):
+            side = np.maximum(np.linalg.norm(c[..., :2] - pos[None], axis=-1) - people.radius, 0.0)
+            up = np.maximum(np.maximum(-c[..., 2], c[..., 2] - people.height), 0.0)
+            return np.hypot(side, up) < self._reach[idx][:, None]            # NaN (hidden): False
+
+    def _rects(self, idx: np.ndarray, pos: np.ndarray, close: np.ndarray | None = None) -> np.ndarray:
         """(n, people, 4) canvas boxes (x0, y0, x1, y1) holding every pixel each person covers.
 
         Each person's vertices are projected on the ideal canvas (exact pinhole, the
         matrices the rasteriser uses, OpenCV pixel convention); the pixels a person
         covers lie inside the box of its projected vertices, widened by 2 px for
-        rasterisation. A person straddling the near plane gets the whole canvas; hidden,
-        wholly behind the near plane or off the canvas: a NaN row. A side on the canvas
-        edge extends to infinity.
+        rasterisation. A person straddling the near plane, or ``close`` to the camera
+        (:meth:`_close`, computed when None), gets the whole canvas; hidden, wholly behind
+        the near plane or off the canvas: a NaN row. A side on the canvas edge extends to
+        infinity.
         """
         cw, ch = self.canvas_size
         n, P = len(idx), len(self._people_pts)
@@ -314,6 +340,8 @@ class Renderer:
         behind = (z < 0.999 * ZNEAR).all(axis=2)
         box[~front] = [-np.inf, -np.inf, np.inf, np.inf]              # straddles the near plane
         box[behind | (front & off)] = np.nan
+        close = self._close(idx, pos) if close is None else close
+        box[close[:, shown]] = [-np.inf, -np.inf, np.inf, np.inf]   # drawn unclipped
         rects[:, shown] = box
         return rects
 
