@@ -86,8 +86,10 @@ class Page:
 class Rasteriser:
     """Draws ``mesh`` for up to ``n_tiles`` cameras of ``width`` x ``height`` pixels per pass.
 
-    mesh : the room and the people (:class:`render.geometry.Mesh`)
+    mesh : the room and the people (:class:`render.geometry.Mesh`), the room's vertices first
     n_people : how many people the mesh holds (size of the offsets uniform)
+    near_only : how many of the mesh's last vertices (the people's soles) are drawn only
+        for the cameras flagged ``near`` (:meth:`_draw_range`)
     """
 
     #: Cull the people's back faces (see :meth:`_draw_range`); False draws both (tests).
@@ -98,7 +100,7 @@ class Rasteriser:
     max_page_height: int | None = None
 
     def __init__(self, mesh: Mesh, n_people: int, width: int, height: int, n_tiles: int,
-                 backend: str = "egl"):
+                 backend: str = "egl", near_only: int = 0):
         if n_people > 254:
             raise ValueError(f"people.count: expected at most 254 people (uint8 labels), got {n_people}")
         self.backend, GL = gl.context(backend)
@@ -110,6 +112,10 @@ class Rasteriser:
         self.people_first = int(np.argmin(room)) if not room.all() else self.n_vertices
         if room[self.people_first:].any():
             raise ValueError("mesh: expected the room's vertices first, then the people's")
+        self.near_only = int(near_only)
+        if not 0 <= self.near_only <= self.n_vertices - self.people_first:
+            raise ValueError(f"near_only: expected 0..{self.n_vertices - self.people_first} of the people's "
+                             f"vertices, got {near_only}")
         self.pages: list[Page] = []
         self._build_program(GL)
         self._build_buffers(GL, mesh)
@@ -234,7 +240,7 @@ class Rasteriser:
         # camera still gets its room before its people
         self._draw_range(GL, vp, local, 0, self.people_first)
         self._draw_range(GL, vp, local, self.people_first, self.n_vertices - self.people_first, cull=True,
-                         near=near)
+                         near=near, near_only=self.near_only)
         if not read:
             return
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
@@ -248,13 +254,13 @@ class Rasteriser:
                                 GL.GL_UNSIGNED_BYTE, self.pixels[page.first + int(b)])
 
     def _draw_range(self, GL, view_projs: np.ndarray, bands, first: int, count: int,
-                    cull: bool = False, near=None) -> None:
+                    cull: bool = False, near=None, near_only: int = 0) -> None:
         """Draw vertices ``first .. first + count`` once per camera, camera k in band ``bands[k]``.
 
         cull : cull back faces (for the people's triangles; with :attr:`cull_back_faces`).
-        A person is a closed convex surface (:func:`render.geometry.cylinder`), so for a
-        camera outside it a back face's fragment always lies behind a front face's at
-        the same pixel: culling the back faces leaves every covered pixel and label as it
+        A person (:func:`render.geometry.cylinder`) is a closed convex surface for every
+        camera above the floor and outside it (its open bottom faces the floor), so a back
+        face's fragment always lies behind a front face's at the same pixel: culling the back faces leaves every covered pixel and label as it
         was, and llvmpipe rasterises ~40 % fewer triangles (the side's far half). Only
         where a front and a back face tie in depth on the outline does the front face's
         colour now win, as a camera would see it. Front faces are set in :meth:`_state`.
@@ -265,6 +271,8 @@ class Rasteriser:
             depth 0, in front of the room, and a camera inside a person, which faces
             only back faces, sees that person all round, as a real lens behind someone's
             back sees them and nothing else.
+        near_only : the last ``near_only`` of the ``count`` vertices (the people's soles,
+            which only a camera inside a person can see) are drawn for near cameras only.
         """
         if count == 0:
             return
@@ -282,7 +290,7 @@ class Rasteriser:
                         (GL.glDisable if clamped else GL.glEnable)(GL.GL_CULL_FACE)
                 GL.glViewport(0, int(b) * self.height, self.width, self.height)
                 GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, view_projs[k])
-                GL.glDrawArrays(GL.GL_TRIANGLES, first, count)
+                GL.glDrawArrays(GL.GL_TRIANGLES, first, count if near[k] else count - near_only)
         finally:
             GL.glDisable(GL.GL_CULL_FACE)
             GL.glDisable(GL.GL_DEPTH_CLAMP)
@@ -397,7 +405,7 @@ class Rasteriser:
         self._state(GL, page)
         self._set_offsets(GL, offsets_xy)
         self._draw_range(GL, vp[todo], local, self.people_first, self.n_vertices - self.people_first,
-                         cull=True, near=near[todo])
+                         cull=True, near=near[todo], near_only=self.near_only)
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, self.width)
         GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)

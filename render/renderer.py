@@ -19,7 +19,7 @@ import numpy as np
 from scene.config import Scene
 
 from .distortion import DistortionMaps, distort, distort_region, distortion_maps, regions_of
-from .geometry import Lighting, Mesh, people_mesh, room_mesh
+from .geometry import Lighting, Mesh, people_mesh, room_mesh, soles_mesh
 from .noise import draw_gains_offsets, noise_pool, sense
 from .pose import projection_matrix, view_matrix
 from .raster import Rasteriser
@@ -137,8 +137,10 @@ class Renderer:
         self.canvas_size = (cw, ch)
         people = scene.people
         people_m = people_mesh(people, lighting)
-        mesh = Mesh.concatenate([room_mesh(scene.room, lighting), people_m])
-        self.raster = Rasteriser(mesh, people.count, cw, ch, len(self.cameras), scene.render.backend)
+        soles = soles_mesh(people, lighting)                 # last: drawn only for cameras close to someone
+        mesh = Mesh.concatenate([room_mesh(scene.room, lighting), people_m, soles])
+        self.raster = Rasteriser(mesh, people.count, cw, ch, len(self.cameras), scene.render.backend,
+                                 near_only=len(soles.positions))
         self.backend = self.raster.backend
         # for the regions people can touch: each person's vertices (at the origin) and
         # each camera's ideal canvas projection (OpenCV convention, pixel centres integer)
