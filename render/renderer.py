@@ -111,8 +111,10 @@ class Renderer:
     whole scene). ``cv2.remap`` applies each camera's lens distortion (bilinear for RGB, nearest for
     labels) only inside the regions the people can change, the rest of each frame being
     the cached distorted background (bit-identical to remapping everything); then the
-    per-frame gain and the pooled sensor noise (:mod:`render.noise`). docs/render.md.
-    Use as a context manager, or call :meth:`close`.
+    per-frame gain and the pooled sensor noise (:mod:`render.noise`). A camera that a
+    person comes within the near plane of, or encloses, sees that person wherever it
+    covers the lens (:meth:`_close`). docs/render.md. Use as a context manager, or call
+    :meth:`close`.
     """
 
     def __init__(self, scene: Scene, cameras=None, lighting: Lighting = DEFAULT_LIGHTING):
