@@ -171,7 +171,7 @@ def cylinder(radius: float, height: float, colour, person: int, lighting: Lighti
 
     Bands from the floor: legs (clothing, darker), torso (clothing), head (skin), and a
     hair-coloured top cap. Side normals are radial, so the shading varies smoothly
-    around the body.
+    around the body. Open at the bottom: :func:`sole` closes it.
     """
     colour = np.asarray(colour, float)
     head = min(0.25, 0.2 * height)
@@ -196,6 +196,36 @@ def cylinder(radius: float, height: float, colour, person: int, lighting: Lighti
     pts, normals, cols = np.concatenate(pts), np.concatenate(normals), np.concatenate(cols)
     return Mesh(pts.astype(np.float32), _shade(cols, pts, normals, lighting).astype(np.float32),
                 np.full(len(pts), float(person), np.float32))
+
+
+def sole(radius: float, height: float, colour, person: int, lighting: Lighting = Lighting(),
+         segments: int = 32) -> Mesh:
+    """The bottom cap of :func:`cylinder` (its legs' colour), facing the floor.
+
+    It closes the person for a camera inside it, which would otherwise see the floor at
+    its feet (docs/render.md); from outside, no camera above the floor ever sees it (it
+    faces away and lies within the closed body). It floats a thousandth of the height
+    above the floor, so that it does not tie with the floor in depth.
+
+    >>> m = sole(0.25, 1.75, np.array([200, 30, 30]), person=0)
+    >>> len(m.positions), round(float(m.positions[:, 2].max()), 6)
+    (96, 0.00175)
+    """
+    a = np.linspace(0.0, 2 * np.pi, segments + 1)
+    ring = np.column_stack([np.cos(a), np.sin(a)])
+    disc = np.stack([np.zeros((segments, 2)), ring[1:], ring[:-1]], axis=1).reshape(-1, 2) * radius
+    pts = np.column_stack([disc, np.full(len(disc), 1e-3 * height)])
+    normals = np.tile([0.0, 0.0, -1.0], (len(pts), 1))
+    cols = np.tile(0.7 * np.asarray(colour, float), (len(pts), 1))
+    return Mesh(pts.astype(np.float32), _shade(cols, pts, normals, lighting).astype(np.float32),
+                np.full(len(pts), float(person), np.float32))
+
+
+def soles_mesh(people, lighting: Lighting = Lighting()) -> Mesh:
+    """One :func:`sole` per person of ``people``, at the origin."""
+    return Mesh.concatenate(sole(people.radius, people.height, people.colours[i], i, lighting)
+                            for i in range(people.count)) if people.count else \
+        Mesh(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.float32), np.zeros(0, np.float32))
 
 
 def people_mesh(people, lighting: Lighting = Lighting()) -> Mesh:

@@ -2,13 +2,17 @@
 
 One vertex buffer holds the room and every person (people at their origin); one
 uniform array moves the people, so nothing is re-uploaded when they walk. Each camera
-draws into its own horizontal band of one tall framebuffer (RGBA8 + depth), upside
+draws into its own horizontal band of a tall framebuffer (RGBA8 + depth), upside
 down so that ``glReadPixels`` returns rows top first, and one ``glReadPixels`` reads
-all cameras at once into a preallocated ``(n_cams, H, W, 4)`` array: RGB is the baked
+all its cameras at once into a preallocated ``(n_cams, H, W, 4)`` array. A framebuffer
+(a *page*) holds as many bands as the OpenGL implementation's size limit allows
+(16384 rows on llvmpipe: 31 lab canvases); more cameras take more pages, each drawn
+and read in turn, band b being band ``b % per_page`` of page ``b // per_page``: RGB is the baked
 vertex colour, interpolated across the triangle; alpha is the exact label (person
 index + 1, 0 for the room), written from a ``flat`` varying. No lighting, no MSAA, no
-blending. The people's back faces are culled (:meth:`Rasteriser._draw_range`);
-the room's faces are all drawn.
+blending. The people's back faces are culled (:meth:`Rasteriser._draw_range`),
+except for the cameras a person comes within the near plane of or encloses (``near``),
+which draw them unclipped by the near plane; the room's faces are all drawn.
 
 :meth:`Rasteriser.draw` draws everything (the room, the benchmark floor, the tests'
 reference). The renderer's steps use :meth:`Rasteriser.draw_people`: a copy of the
@@ -26,6 +30,7 @@ The context comes from :func:`render.gl.context` (one per process, shared).
 from __future__ import annotations
 
 import ctypes
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -60,18 +65,42 @@ void main() { frag = vec4(v_colour, v_label); }
 HIDDEN = 1.0e6
 
 
+@dataclass
+class Page:
+    """One framebuffer: bands ``first .. first + tiles - 1``, band ``first`` at the bottom.
+
+    fbo, colour (texture), depth (renderbuffer) : what is drawn into
+    room_fbo, room_colour, room_depth : the room's copy (:meth:`Rasteriser.store_room`)
+    """
+
+    first: int
+    tiles: int
+    fbo: int
+    colour: int
+    depth: int
+    room_fbo: int | None = None
+    room_colour: int | None = None
+    room_depth: int | None = None
+
+
 class Rasteriser:
     """Draws ``mesh`` for up to ``n_tiles`` cameras of ``width`` x ``height`` pixels per pass.
 
-    mesh : the room and the people (:class:`render.geometry.Mesh`)
+    mesh : the room and the people (:class:`render.geometry.Mesh`), the room's vertices first
     n_people : how many people the mesh holds (size of the offsets uniform)
+    near_only : how many of the mesh's last vertices (the people's soles) are drawn only
+        for the cameras flagged ``near`` (:meth:`_draw_range`)
     """
 
     #: Cull the people's back faces (see :meth:`_draw_range`); False draws both (tests).
     cull_back_faces = True
 
+    #: Rows of one framebuffer (page) at most; None: the OpenGL implementation's limit
+    #: (``GL_MAX_RENDERBUFFER_SIZE``, ``GL_MAX_TEXTURE_SIZE``). Tests lower it to page.
+    max_page_height: int | None = None
+
     def __init__(self, mesh: Mesh, n_people: int, width: int, height: int, n_tiles: int,
-                 backend: str = "egl"):
+                 backend: str = "egl", near_only: int = 0):
         if n_people > 254:
             raise ValueError(f"people.count: expected at most 254 people (uint8 labels), got {n_people}")
         self.backend, GL = gl.context(backend)
@@ -83,11 +112,14 @@ class Rasteriser:
         self.people_first = int(np.argmin(room)) if not room.all() else self.n_vertices
         if room[self.people_first:].any():
             raise ValueError("mesh: expected the room's vertices first, then the people's")
-        self.room_fbo = None                        # the room alone (colour + depth), see store_room
-        self._objects = {}
+        self.near_only = int(near_only)
+        if not 0 <= self.near_only <= self.n_vertices - self.people_first:
+            raise ValueError(f"near_only: expected 0..{self.n_vertices - self.people_first} of the people's "
+                             f"vertices, got {near_only}")
+        self.pages: list[Page] = []
         self._build_program(GL)
         self._build_buffers(GL, mesh)
-        self._build_framebuffer(GL)
+        self._build_pages(GL)
         self.pixels = np.empty((self.n_tiles, self.height, self.width, 4), np.uint8)
 
     def _build_program(self, GL) -> None:
@@ -115,30 +147,41 @@ class Rasteriser:
             GL.glVertexAttribPointer(loc, size, GL.GL_FLOAT, GL.GL_FALSE, stride, ctypes.c_void_p(start * 4))
         GL.glBindVertexArray(0)
 
-    def _build_framebuffer(self, GL) -> None:
-        full_height = self.height * self.n_tiles
-        limit = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
-        if full_height > limit or self.width > limit:
-            raise ValueError(f"cameras: {self.n_tiles} cameras of {self.width}x{self.height} exceed the "
-                             f"renderbuffer limit {limit}; render fewer cameras per pass")
-        self.fbo = GL.glGenFramebuffers(1)
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
-        self.canvas_tex = _texture(GL, GL.GL_RGBA8, self.width, full_height, GL.GL_RGBA,
-                                   GL.GL_UNSIGNED_BYTE, None, GL.GL_LINEAR)
-        GL.glFramebufferTexture2D(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D,
-                                  self.canvas_tex, 0)
-        self.depth_rb = GL.glGenRenderbuffers(1)
-        GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self.depth_rb)
-        GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_DEPTH_COMPONENT24, self.width, full_height)
-        GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_DEPTH_ATTACHMENT, GL.GL_RENDERBUFFER,
-                                     self.depth_rb)
+    def _build_pages(self, GL) -> None:
+        limit = min(int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE)),
+                    int(GL.glGetIntegerv(GL.GL_MAX_TEXTURE_SIZE)))
+        rows = limit if self.max_page_height is None else min(limit, int(self.max_page_height))
+        if self.width > limit or self.height > rows:
+            raise ValueError(f"cameras.intrinsics.resolution: a canvas of {self.width}x{self.height} pixels "
+                             f"(the image and its distortion margin) exceeds this OpenGL's limit of {rows}")
+        self.per_page = rows // self.height
+        for first in range(0, self.n_tiles, self.per_page):
+            self._add_page(GL, first, min(self.per_page, self.n_tiles - first))
+
+    def _add_page(self, GL, first: int, tiles: int) -> None:
+        height = self.height * tiles
+        fbo = GL.glGenFramebuffers(1)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, fbo)
+        colour = _texture(GL, GL.GL_RGBA8, self.width, height, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE, None,
+                          GL.GL_LINEAR)
+        GL.glFramebufferTexture2D(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D, colour, 0)
+        depth = GL.glGenRenderbuffers(1)
+        self.pages.append(Page(first, tiles, fbo, colour, depth))
+        GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, depth)
+        GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_DEPTH_COMPONENT24, self.width, height)
+        GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_DEPTH_ATTACHMENT, GL.GL_RENDERBUFFER, depth)
         status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
         if status != GL.GL_FRAMEBUFFER_COMPLETE:
             raise RuntimeError(f"OpenGL framebuffer incomplete (status 0x{int(status):x})")
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+
+    def _by_page(self, bands: np.ndarray) -> list[tuple[Page, np.ndarray]]:
+        """The pages ``bands`` fall in, each with the indices k (in order) of its bands."""
+        page = bands // self.per_page
+        return [(self.pages[p], np.flatnonzero(page == p)) for p in np.unique(page)]
 
     def draw(self, view_projs: np.ndarray, offsets_xy: np.ndarray, read: bool = True,
-             bands=None) -> np.ndarray:
+             bands=None, near=None) -> np.ndarray:
         """Draw every camera's ideal canvas and (with ``read``) read the pixels back.
 
         view_projs : (n, 4, 4) float, projection @ view per camera, n <= n_tiles
@@ -147,6 +190,9 @@ class Rasteriser:
             drawn in (default 0..n-1); only those bands are cleared and read. A camera
             always drawn in the same band gives bit-identical pixels wherever the scene
             is the same (the renderer relies on it to reuse its cached background).
+        near : (n,) bool, the cameras a person may come within the near plane of (or
+            enclose): their people are drawn with back faces and without near clipping
+            (:meth:`_draw_range`); default none
         Returns (n, H, W, 4) uint8, rows top first: RGB and the label in alpha. Band b is
         read into ``self.pixels[b]`` (the result is a view of it when the bands are
         consecutive): it is reused by the next call that reads band b, copy what you keep.
@@ -158,75 +204,105 @@ class Rasteriser:
         bands = np.arange(n) if bands is None else np.asarray(bands, int).reshape(-1)
         if len(bands) != n or len(set(bands.tolist())) != n or bands.min() < 0 or bands.max() >= self.n_tiles:
             raise ValueError(f"bands: expected {n} distinct band numbers in 0..{self.n_tiles - 1}, got {bands}")
-        b0 = int(bands[0])
-        consecutive = np.array_equal(bands, np.arange(b0, b0 + n))
+        near = _flags(near, n)
         gl.context(self.backend)
-        self._state(GL)
+        vp = np.ascontiguousarray(view_projs, np.float32)
+        for page, ks in self._by_page(bands):
+            local = bands[ks] - page.first
+            self._draw_page(GL, page, vp[ks], offsets_xy, local, near[ks], read)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+        if not read:
+            return None
+        b0 = int(bands[0])
+        if np.array_equal(bands, np.arange(b0, b0 + n)):
+            return self.pixels[b0:b0 + n]
+        return self.pixels[bands]
+
+    def _draw_page(self, GL, page: Page, vp: np.ndarray, offsets_xy, local: np.ndarray, near: np.ndarray,
+                   read: bool) -> None:
+        """:meth:`draw` of the cameras whose bands are ``local`` (bands of ``page``)."""
+        l0 = int(local[0])
+        consecutive = np.array_equal(local, np.arange(l0, l0 + len(local)))
+        self._state(GL, page)
         self._set_offsets(GL, offsets_xy)
         GL.glClearColor(0.0, 0.0, 0.0, 0.0)
-        if consecutive and n == self.n_tiles:
+        if consecutive and len(local) == page.tiles:
             GL.glDisable(GL.GL_SCISSOR_TEST)
             GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
         else:                                       # clear only the bands drawn now
             GL.glEnable(GL.GL_SCISSOR_TEST)
-            runs = [(b0, n)] if consecutive else [(int(b), 1) for b in bands]
+            runs = [(l0, len(local))] if consecutive else [(int(b), 1) for b in local]
             for start, count in runs:
                 GL.glScissor(0, start * self.height, self.width, count * self.height)
                 GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
             GL.glDisable(GL.GL_SCISSOR_TEST)
-        vp = np.ascontiguousarray(view_projs, np.float32)
         # every camera's room, then every camera's people: the bands are disjoint, so each
         # camera still gets its room before its people
-        self._draw_range(GL, vp, bands, 0, self.people_first)
-        self._draw_range(GL, vp, bands, self.people_first, self.n_vertices - self.people_first, cull=True)
+        self._draw_range(GL, vp, local, 0, self.people_first)
+        self._draw_range(GL, vp, local, self.people_first, self.n_vertices - self.people_first, cull=True,
+                         near=near, near_only=self.near_only)
         if not read:
-            GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
-            return None
+            return
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
-        if consecutive:                             # one read for all cameras
-            out = self.pixels[b0:b0 + n]
-            GL.glReadPixels(0, b0 * self.height, self.width, self.height * n, GL.GL_RGBA,
-                            GL.GL_UNSIGNED_BYTE, out)
+        if consecutive:                             # one read for all the page's cameras
+            GL.glReadPixels(0, l0 * self.height, self.width, self.height * len(local), GL.GL_RGBA,
+                            GL.GL_UNSIGNED_BYTE, self.pixels[page.first + l0:page.first + l0 + len(local)])
         else:
-            for b in bands:
+            for b in local:
                 GL.glReadPixels(0, int(b) * self.height, self.width, self.height, GL.GL_RGBA,
-                                GL.GL_UNSIGNED_BYTE, self.pixels[b])
-            out = self.pixels[bands]
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
-        return out
+                                GL.GL_UNSIGNED_BYTE, self.pixels[page.first + int(b)])
 
     def _draw_range(self, GL, view_projs: np.ndarray, bands, first: int, count: int,
-                    cull: bool = False) -> None:
+                    cull: bool = False, near=None, near_only: int = 0) -> None:
         """Draw vertices ``first .. first + count`` once per camera, camera k in band ``bands[k]``.
 
         cull : cull back faces (for the people's triangles; with :attr:`cull_back_faces`).
-        A person is a closed convex surface for every camera above the floor (the open
-        bottom faces the floor), so a back face's fragment always lies behind a front face's
-        at the same pixel: culling the back faces leaves every covered pixel and label as
-        it was, and llvmpipe rasterises ~40 % fewer triangles (the side's far half). Only
+        A person (:func:`render.geometry.cylinder`) is a closed convex surface for every
+        camera above the floor and outside it (its open bottom faces the floor), so a back
+        face's fragment always lies behind a front face's at the same pixel: culling the back faces leaves every covered pixel and label as it
+        was, and llvmpipe rasterises ~40 % fewer triangles (the side's far half). Only
         where a front and a back face tie in depth on the outline does the front face's
         colour now win, as a camera would see it. Front faces are set in :meth:`_state`.
+        near : (n,) bool or None; for camera k with ``near[k]`` (a person may reach
+            within its near plane, or enclose it) the back faces are drawn and nothing
+            is clipped at the near (or far) plane: depth is clamped instead
+            (``GL_DEPTH_CLAMP``), so a surface nearer than the near plane is drawn at
+            depth 0, in front of the room, and a camera inside a person, which faces
+            only back faces, sees that person all round, as a real lens behind someone's
+            back sees them and nothing else.
+        near_only : the last ``near_only`` of the ``count`` vertices (the people's soles,
+            which only a camera inside a person can see) are drawn for near cameras only.
         """
         if count == 0:
             return
-        if cull and self.cull_back_faces:
+        near = _flags(near, len(bands))
+        culling = cull and self.cull_back_faces
+        if culling:
             GL.glEnable(GL.GL_CULL_FACE)
+        clamped = False
         try:
             for k, b in enumerate(bands):
+                if cull and near[k] != clamped:          # toggle only where it changes
+                    clamped = bool(near[k])
+                    (GL.glEnable if clamped else GL.glDisable)(GL.GL_DEPTH_CLAMP)
+                    if culling:
+                        (GL.glDisable if clamped else GL.glEnable)(GL.GL_CULL_FACE)
                 GL.glViewport(0, int(b) * self.height, self.width, self.height)
                 GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, view_projs[k])
-                GL.glDrawArrays(GL.GL_TRIANGLES, first, count)
+                GL.glDrawArrays(GL.GL_TRIANGLES, first, count if near[k] else count - near_only)
         finally:
             GL.glDisable(GL.GL_CULL_FACE)
+            GL.glDisable(GL.GL_DEPTH_CLAMP)
 
-    def _state(self, GL) -> None:
-        """The fixed pipeline state of every pass (bound program, VAO and framebuffer)."""
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
+    def _state(self, GL, page: Page) -> None:
+        """The fixed pipeline state of every pass (bound program, VAO and ``page``'s framebuffer)."""
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, page.fbo)
         GL.glUseProgram(self.program)
         GL.glBindVertexArray(self.vao)
         GL.glDisable(GL.GL_BLEND)
         GL.glDisable(GL.GL_CULL_FACE)
+        GL.glDisable(GL.GL_DEPTH_CLAMP)
         GL.glFrontFace(GL.GL_CW)          # meshes wind counter-clockwise seen from outside,
         GL.glCullFace(GL.GL_BACK)         # and the projection flips rows (flip_rows)
         GL.glDisable(GL.GL_MULTISAMPLE)
@@ -242,39 +318,40 @@ class Rasteriser:
             GL.glUniform2fv(self._u_offsets, self.n_people, off)
 
     def store_room(self) -> None:
-        """Keep a copy of the whole framebuffer (colour and depth) as the room.
+        """Keep a copy of every page (colour and depth) as the room.
 
         Call it right after a :meth:`draw` of every band with every person hidden: then
         :meth:`draw_people` can start from the room's exact colour and depth in any band.
         """
         GL = self.GL
         gl.context(self.backend)
-        full_height = self.height * self.n_tiles
-        if self.room_fbo is None:
-            self.room_fbo = GL.glGenFramebuffers(1)
-            GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.room_fbo)
-            self.room_colour = GL.glGenRenderbuffers(1)
-            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self.room_colour)
-            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_RGBA8, self.width, full_height)
-            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_RENDERBUFFER,
-                                         self.room_colour)
-            self.room_depth = GL.glGenRenderbuffers(1)
-            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self.room_depth)
-            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_DEPTH_COMPONENT24, self.width, full_height)
-            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_DEPTH_ATTACHMENT, GL.GL_RENDERBUFFER,
-                                         self.room_depth)
-            status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
-            if status != GL.GL_FRAMEBUFFER_COMPLETE:
-                raise RuntimeError(f"OpenGL framebuffer incomplete (status 0x{int(status):x})")
-        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self.fbo)
-        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, self.room_fbo)
-        GL.glDisable(GL.GL_SCISSOR_TEST)
-        GL.glBlitFramebuffer(0, 0, self.width, full_height, 0, 0, self.width, full_height,
-                             GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
+        for page in self.pages:
+            height = self.height * page.tiles
+            if page.room_fbo is None:
+                page.room_fbo = GL.glGenFramebuffers(1)
+                GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, page.room_fbo)
+                page.room_colour = GL.glGenRenderbuffers(1)
+                GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, page.room_colour)
+                GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_RGBA8, self.width, height)
+                GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_RENDERBUFFER,
+                                             page.room_colour)
+                page.room_depth = GL.glGenRenderbuffers(1)
+                GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, page.room_depth)
+                GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_DEPTH_COMPONENT24, self.width, height)
+                GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_DEPTH_ATTACHMENT, GL.GL_RENDERBUFFER,
+                                             page.room_depth)
+                status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+                if status != GL.GL_FRAMEBUFFER_COMPLETE:
+                    raise RuntimeError(f"OpenGL framebuffer incomplete (status 0x{int(status):x})")
+            GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, page.fbo)
+            GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, page.room_fbo)
+            GL.glDisable(GL.GL_SCISSOR_TEST)
+            GL.glBlitFramebuffer(0, 0, self.width, height, 0, 0, self.width, height,
+                                 GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
 
     def draw_people(self, view_projs: np.ndarray, offsets_xy: np.ndarray, bands, rects,
-                    out: np.ndarray) -> None:
+                    out: np.ndarray, near=None) -> None:
         """Draw only the people over the stored room, inside ``rects``, and read those back.
 
         view_projs : (n, 4, 4) float, projection @ view per camera
@@ -285,6 +362,7 @@ class Rasteriser:
             drawn, nothing read)
         out : (n_tiles, H, W, 4) uint8, C-contiguous; each of band b's rectangles is read
             into ``out[b, y0:y1, x0:x1]``, the rest of ``out`` is left alone
+        near : (n,) bool, as in :meth:`draw` (default none)
 
         Per camera: the room's colour and depth are copied (``glBlitFramebuffer``) from
         the stored room into each rectangle, then only the people's triangles are drawn.
@@ -293,7 +371,7 @@ class Rasteriser:
         rectangles the pixels are those of the whole-scene draw, bit for bit, provided
         the rectangles hold every pixel the people cover. Requires :meth:`store_room`.
         """
-        if self.room_fbo is None:
+        if any(page.room_fbo is None for page in self.pages):
             raise RuntimeError("draw_people: store_room() first")
         GL = self.GL
         bands = np.asarray(bands, int).reshape(-1)
@@ -302,32 +380,40 @@ class Rasteriser:
                              f"{len(view_projs)}, {len(bands)}, {len(rects)}")
         if out.shape != self.pixels.shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
             raise ValueError(f"out: expected a C-contiguous uint8 array of shape {self.pixels.shape}")
-        todo = [k for k in range(len(bands)) if len(rects[k])]
-        if not todo:
+        near = _flags(near, len(bands))
+        todo = np.array([k for k in range(len(bands)) if len(rects[k])], int)
+        if not len(todo):
             return
         gl.context(self.backend)
+        vp = np.ascontiguousarray(view_projs, np.float32)
+        for page, sel in self._by_page(bands[todo]):
+            self._draw_people_page(GL, page, vp, offsets_xy, bands, rects, out, near, todo[sel])
+
+    def _draw_people_page(self, GL, page: Page, vp: np.ndarray, offsets_xy, bands: np.ndarray, rects,
+                          out: np.ndarray, near: np.ndarray, todo: np.ndarray) -> None:
+        """:meth:`draw_people` of cameras ``todo`` (indices into the other arguments), all on ``page``."""
         H = self.height
+        local = bands[todo] - page.first
         GL.glDisable(GL.GL_SCISSOR_TEST)
-        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self.room_fbo)
-        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, self.fbo)
-        for k in todo:
-            b = int(bands[k]) * H
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, page.room_fbo)
+        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, page.fbo)
+        for k, lb in zip(todo, local):
+            b = int(lb) * H
             for x0, y0, x1, y1 in rects[k]:
                 GL.glBlitFramebuffer(x0, b + y0, x1, b + y1, x0, b + y0, x1, b + y1,
                                      GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
-        self._state(GL)
+        self._state(GL, page)
         self._set_offsets(GL, offsets_xy)
-        vp = np.ascontiguousarray(view_projs, np.float32)
-        self._draw_range(GL, vp[todo], bands[todo], self.people_first, self.n_vertices - self.people_first,
-                         cull=True)
+        self._draw_range(GL, vp[todo], local, self.people_first, self.n_vertices - self.people_first,
+                         cull=True, near=near[todo], near_only=self.near_only)
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, self.width)
         GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
         try:
-            for k in todo:
+            for k, lb in zip(todo, local):
                 b = int(bands[k])
                 for x0, y0, x1, y1 in rects[k]:
-                    GL.glReadPixels(x0, b * H + y0, x1 - x0, y1 - y0, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE,
+                    GL.glReadPixels(x0, int(lb) * H + y0, x1 - x0, y1 - y0, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE,
                                     out[b, y0, x0:].ctypes.data)
         finally:
             GL.glPixelStorei(GL.GL_PACK_ROW_LENGTH, 0)
@@ -340,17 +426,27 @@ class Rasteriser:
         GL = self.GL
         try:
             gl.context(self.backend)
-            GL.glDeleteFramebuffers(1, [self.fbo])
-            if self.room_fbo is not None:
-                GL.glDeleteFramebuffers(1, [self.room_fbo])
-                GL.glDeleteRenderbuffers(2, [self.room_colour, self.room_depth])
-            GL.glDeleteRenderbuffers(1, [self.depth_rb])
-            GL.glDeleteTextures([self.canvas_tex])
+            for page in self.pages:
+                GL.glDeleteFramebuffers(1, [page.fbo])
+                GL.glDeleteRenderbuffers(1, [page.depth])
+                GL.glDeleteTextures([page.colour])
+                if page.room_fbo is not None:
+                    GL.glDeleteFramebuffers(1, [page.room_fbo])
+                    GL.glDeleteRenderbuffers(2, [page.room_colour, page.room_depth])
+            self.pages = []
             GL.glDeleteBuffers(1, [self.vbo])
             GL.glDeleteVertexArrays(1, [self.vao])
             GL.glDeleteProgram(self.program)
         finally:
             self.program = None
+
+
+def _flags(near, n: int) -> np.ndarray:
+    """``near`` as (n,) bool, all False for None."""
+    near = np.zeros(n, bool) if near is None else np.asarray(near, bool).reshape(-1)
+    if len(near) != n:
+        raise ValueError(f"near: expected one flag per camera ({n}), got {len(near)}")
+    return near
 
 
 def _texture(GL, internal, width, height, fmt, dtype, data, filtering):

@@ -19,7 +19,7 @@ import numpy as np
 from scene.config import Scene
 
 from .distortion import DistortionMaps, distort, distort_region, distortion_maps, regions_of
-from .geometry import Lighting, Mesh, people_mesh, room_mesh
+from .geometry import Lighting, Mesh, people_mesh, room_mesh, soles_mesh
 from .noise import draw_gains_offsets, noise_pool, sense
 from .pose import projection_matrix, view_matrix
 from .raster import Rasteriser
@@ -27,8 +27,12 @@ from .raster import Rasteriser
 #: The default lighting (frozen, shared).
 DEFAULT_LIGHTING = Lighting()
 
-#: Clipping planes of the OpenGL cameras, metres.
-ZNEAR, ZFAR = 0.05, 50.0
+#: Near clipping plane of the OpenGL cameras, metres (the far plane is :func:`far_plane`'s).
+ZNEAR = 0.05
+
+#: The far clipping plane is never nearer than this, metres: every scene whose far corner
+#: is within 25 m of its cameras keeps exactly the depth values (and pixels) it always had.
+ZFAR_MIN = 50.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,6 +53,31 @@ class Frames:
     def masks(self) -> np.ndarray:
         """(n_cams, H, W) bool, True where any person is."""
         return self.labels > 0
+
+
+def far_plane(scene: Scene) -> float:
+    """The far clipping plane of every camera of ``scene``, metres.
+
+    Twice the largest distance from any camera of the scene to any corner of the room's
+    bounding box, from the floor to the ceiling or the people's heads (whichever is
+    higher) and widened by the people's radius, and at least :data:`ZFAR_MIN`: nothing
+    inside the room is ever clipped, whatever the scene's size or unit. It depends on
+    all the scene's cameras, not on those a renderer prepares, so a camera's pixels do
+    not depend on which others are rendered. With the near plane fixed at :data:`ZNEAR`
+    the depth step at distance d is about d**2 / (ZNEAR * 2**24) whatever the far plane
+    (0.1 mm at 9 m, 4 mm at 60 m), so a generous far plane costs no depth precision.
+
+    >>> from scene import load_scene
+    >>> far_plane(load_scene("lab"))
+    50.0
+    """
+    x0, y0, x1, y1 = scene.room.polygon.bounds
+    r = scene.people.radius if scene.people.count else 0.0
+    top = max(scene.room.height, scene.people.height if scene.people.count else 0.0)
+    corners = np.array([[x, y, z] for x in (x0 - r, x1 + r) for y in (y0 - r, y1 + r) for z in (0.0, top)])
+    centres = np.stack([np.asarray(c.center_world, float) for c in scene.cameras])
+    farthest = float(np.linalg.norm(corners[None] - centres[:, None], axis=-1).max())
+    return max(ZFAR_MIN, 2.0 * farthest)
 
 
 def check_camera_numbers(name: str, numbers, available) -> tuple[int, ...]:
@@ -82,8 +111,10 @@ class Renderer:
     whole scene). ``cv2.remap`` applies each camera's lens distortion (bilinear for RGB, nearest for
     labels) only inside the regions the people can change, the rest of each frame being
     the cached distorted background (bit-identical to remapping everything); then the
-    per-frame gain and the pooled sensor noise (:mod:`render.noise`). docs/render.md.
-    Use as a context manager, or call :meth:`close`.
+    per-frame gain and the pooled sensor noise (:mod:`render.noise`). A camera that a
+    person comes within the near plane of, or encloses, sees that person wherever it
+    covers the lens (:meth:`_close`). docs/render.md. Use as a context manager, or call
+    :meth:`close`.
     """
 
     def __init__(self, scene: Scene, cameras=None, lighting: Lighting = DEFAULT_LIGHTING):
@@ -101,14 +132,17 @@ class Renderer:
         self.maps, self.map_index = _maps(self.cameras)
         cw = max(m.canvas_size[0] for m in self.maps)
         ch = max(m.canvas_size[1] for m in self.maps)
+        self.zfar = far_plane(scene)                # metres
         self.view_projs = np.stack([
-            projection_matrix(m.canvas_K(c.K), cw, ch, ZNEAR, ZFAR, flip_rows=True) @ view_matrix(c.R, c.t)
+            projection_matrix(m.canvas_K(c.K), cw, ch, ZNEAR, self.zfar, flip_rows=True) @ view_matrix(c.R, c.t)
             for c, m in zip(self.cameras, (self.maps[i] for i in self.map_index))])
         self.canvas_size = (cw, ch)
         people = scene.people
         people_m = people_mesh(people, lighting)
-        mesh = Mesh.concatenate([room_mesh(scene.room, lighting), people_m])
-        self.raster = Rasteriser(mesh, people.count, cw, ch, len(self.cameras), scene.render.backend)
+        soles = soles_mesh(people, lighting)                 # last: drawn only for cameras close to someone
+        mesh = Mesh.concatenate([room_mesh(scene.room, lighting), people_m, soles])
+        self.raster = Rasteriser(mesh, people.count, cw, ch, len(self.cameras), scene.render.backend,
+                                 near_only=len(soles.positions))
         self.backend = self.raster.backend
         # for the regions people can touch: each person's vertices (at the origin) and
         # each camera's ideal canvas projection (OpenCV convention, pixel centres integer)
@@ -124,6 +158,11 @@ class Renderer:
                              zip(self.cameras, (self.maps[i] for i in self.map_index))])
         self._R = np.stack([np.asarray(c.R, float) for c in self.cameras])
         self._t = np.stack([np.asarray(c.t, float).reshape(3) for c in self.cameras])
+        self._centre = np.stack([np.asarray(c.center_world, float) for c in self.cameras])
+        # how far from the lens the near plane reaches inside the canvas frustum, metres
+        corners = np.array([[-0.5, -0.5], [cw - 0.5, -0.5], [-0.5, ch - 0.5], [cw - 0.5, ch - 0.5]])
+        rays = (corners[None] - self._Kc[:, None, :2, 2]) / self._Kc[:, None, [0, 1], [0, 1]]
+        self._reach = ZNEAR * np.sqrt(1.0 + (rays**2).sum(axis=-1)).max(axis=1)      # (n_cams,)
         self._rgba = np.empty((self.height, self.width, 4), np.uint8)   # scratch
         self._alpha = np.zeros((ch, cw), np.uint8)                      # idem, kept all 0
         self._pool = None
@@ -185,7 +224,8 @@ class Renderer:
             gains, offsets = draw_gains_offsets(n, s.gain_jitter, rng)
             if s.noise_std > 0:
                 pool = self._noise_pool()
-        rects = self._rects(idx, pos)
+        close = self._close(idx, pos)
+        rects = self._rects(idx, pos, close)
         regions = regions_of(self._block_lo[idx], self._block_hi[idx], rects, (H, W))
         rgb = np.empty((n, H, W, 3), np.uint8) if colour else None
         labels = np.zeros((n, H, W), np.uint8)
@@ -193,7 +233,7 @@ class Renderer:
         boxes = [_boxes(r, self.canvas_size) for r in rects]
         work = self._work
         try:
-            self._draw_people(idx, pos, boxes)
+            self._draw_people(idx, pos, boxes, close.any(axis=1))
             for k, i in enumerate(idx):
                 noise = None if pool is None else pool[offsets[k]:offsets[k] + H * W * 3].reshape(H, W * 3)
                 self._finish(int(i), work[i], boxes[k], regions[k], background.rgb[i],
@@ -204,7 +244,7 @@ class Renderer:
                     work[i, y0:y1, x0:x1] = self._canvas[i, y0:y1, x0:x1]
         return rgb, labels
 
-    def _draw_people(self, idx: np.ndarray, pos: np.ndarray, boxes: list) -> None:
+    def _draw_people(self, idx: np.ndarray, pos: np.ndarray, boxes: list, near=None) -> None:
         """Draw the people over the room inside their canvas ``boxes``, into ``self._work``.
 
         boxes : per camera, the integer slice bounds (x0, y0, x1, y1), end exclusive, of
@@ -213,8 +253,10 @@ class Renderer:
         cached room canvas outside ``boxes[k]``, inside the people drawn over the room's
         own colour and depth (:meth:`Rasteriser.draw_people`), bit for bit what a
         whole-scene draw gives. The caller restores the boxes from ``self._canvas``.
+        near : (n,) bool, the cameras a person comes close to (:meth:`_close`): their
+            people are drawn with back faces, unclipped by the near plane
         """
-        self.raster.draw_people(self.view_projs[idx], pos, idx, boxes, self._work)
+        self.raster.draw_people(self.view_projs[idx], pos, idx, boxes, self._work, near)
 
     def _finish(self, i: int, canvas: np.ndarray, boxes: list, regions: list, background: np.ndarray,
                 rgb: np.ndarray | None, labels: np.ndarray, gain: float | None,
@@ -251,15 +293,33 @@ class Renderer:
             self._pool = noise_pool(float(self.scene.render.noise_std), self.height * self.width * 3)
         return self._pool
 
-    def _rects(self, idx: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    def _close(self, idx: np.ndarray, pos: np.ndarray) -> np.ndarray:
+        """(n, people) bool: the person's cylinder comes within the near plane's reach of
+        camera ``idx[k]``'s lens, or holds it.
+
+        Only then can the near plane cut the person inside the view, or the camera face
+        the person's back faces alone: such a camera's people are drawn with their back
+        faces and clamped, not clipped, at the near plane (:meth:`Rasteriser._draw_range`).
+        The reach is the distance from the lens to the near plane's farthest corner
+        (~6 cm for the lab); the mesh lies inside the cylinder, so the test is safe.
+        """
+        people = self.scene.people
+        c = self._centre[idx][:, None]                                  # (n, 1, 3)
+        with np.errstate(invalid="ignore"):
+            side = np.maximum(np.linalg.norm(c[..., :2] - pos[None], axis=-1) - people.radius, 0.0)
+            up = np.maximum(np.maximum(-c[..., 2], c[..., 2] - people.height), 0.0)
+            return np.hypot(side, up) < self._reach[idx][:, None]            # NaN (hidden): False
+
+    def _rects(self, idx: np.ndarray, pos: np.ndarray, close: np.ndarray | None = None) -> np.ndarray:
         """(n, people, 4) canvas boxes (x0, y0, x1, y1) holding every pixel each person covers.
 
         Each person's vertices are projected on the ideal canvas (exact pinhole, the
         matrices the rasteriser uses, OpenCV pixel convention); the pixels a person
         covers lie inside the box of its projected vertices, widened by 2 px for
-        rasterisation. A person straddling the near plane gets the whole canvas; hidden,
-        wholly behind the near plane or off the canvas: a NaN row. A side on the canvas
-        edge extends to infinity.
+        rasterisation. A person straddling the near plane, or ``close`` to the camera
+        (:meth:`_close`, computed when None), gets the whole canvas; hidden, wholly behind
+        the near plane or off the canvas: a NaN row. A side on the canvas edge extends to
+        infinity.
         """
         cw, ch = self.canvas_size
         n, P = len(idx), len(self._people_pts)
@@ -284,6 +344,8 @@ class Renderer:
         behind = (z < 0.999 * ZNEAR).all(axis=2)
         box[~front] = [-np.inf, -np.inf, np.inf, np.inf]              # straddles the near plane
         box[behind | (front & off)] = np.nan
+        close = self._close(idx, pos) if close is None else close
+        box[close[:, shown]] = [-np.inf, -np.inf, np.inf, np.inf]   # drawn unclipped
         rects[:, shown] = box
         return rects
 

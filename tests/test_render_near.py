@@ -1,0 +1,103 @@
+"""A camera mounted among the people: a person that covers the lens fills its image.
+
+Camera 3 of the lab is lowered to 1 m and levelled (below the people's heads); camera 1
+is moved into the room, 1 m high, and camera 7 too, 0.3 m high, looking steeply down. The people's back faces are culled for speed, so a
+camera inside a person, or with the person's surface nearer than the near plane, used
+to see the empty room through them, and the hull carved the person out.
+"""
+
+import numpy as np
+import pytest
+
+from scene import Scene, scene_path
+
+pytestmark = pytest.mark.render
+
+LOW = [3.905, 0.05, 1.0]                # camera 3, lowered and levelled
+INSIDE = [2.0, 2.0, 1.0]                # camera 1, in the room
+FEET = [4.5, 3.0, 0.3]                  # camera 7, in the room, near the floor
+
+
+def _scene(count=1):
+    text = scene_path("lab").read_text()
+    text = text.replace("{number: 3, position: [3.905, 0.05, 2.2], yaw_deg: 101.0, pitch_deg: 15.0}",
+                        f"{{number: 3, position: {LOW}, yaw_deg: 101.0, pitch_deg: 0.0}}")
+    text = text.replace("{number: 1, position: [0.781, 0.05, 2.2], yaw_deg: 47.9, pitch_deg: 15.0}",
+                        f"{{number: 1, position: {INSIDE}, yaw_deg: 30.0, pitch_deg: 10.0}}")
+    text = text.replace("{number: 7, position: [6.656, 3.448, 2.2], yaw_deg: -170.5, pitch_deg: 15.0}",
+                        f"{{number: 7, position: {FEET}, yaw_deg: 0.0, pitch_deg: 60.0}}")
+    text = text.replace("  count: 3\n", f"  count: {count}\n")
+    return Scene.from_text(text)
+
+
+@pytest.fixture(scope="module")
+def low():
+    from render import Renderer
+
+    scene = _scene()
+    with Renderer(scene, cameras=[1, 3, 7]) as r:
+        yield scene, r
+
+
+def _ahead(scene, number, distance):
+    """Floor point ``distance`` metres ahead of camera ``number`` along its yaw, (1, 2)."""
+    cam = scene.cameras[number - 1]
+    return (cam.center_world[:2] + distance * np.array([np.cos(cam.yaw), np.sin(cam.yaw)]))[None]
+
+
+@pytest.mark.parametrize("number,xy", [(3, [3.905, 0.27]),   # the repro
+                                       (7, FEET[:2])])        # looking down at the person's feet
+def test_a_camera_inside_a_person_sees_only_that_person(low, number, xy):
+    _, r = low
+    labels = r.labels(np.array([xy]), cameras=[number])
+    assert (labels == 1).all()
+
+
+@pytest.mark.parametrize("gap", [0.01, 0.02, 0.03])
+def test_a_person_nearer_than_the_near_plane_fills_the_image(low, gap):
+    """1-3 cm in front of the lens the person covers the whole view (cut by the near plane before)."""
+    scene, r = low
+    f = r.render(_ahead(scene, 3, scene.people.radius + gap), cameras=[3], clean=True)
+    assert (f.labels == 1).all()
+    assert (f.rgb != r.background(cameras=[3]).rgb).any(axis=-1).mean() > 0.99   # and shows
+
+
+@pytest.mark.parametrize("gap", [0.005, 0.02, 0.1])
+def test_inside_a_person_near_its_surface_looking_out(low, gap):
+    """The surface the camera looks out through is nearer than the near plane."""
+    scene, r = low
+    labels = r.labels(_ahead(scene, 1, gap - scene.people.radius), cameras=[1])
+    assert (labels == 1).all()
+
+
+def test_fast_path_equals_the_whole_scene_draw_for_a_camera_inside(low):
+    """The production step draws people over the stored room; the reference draws everything."""
+    scene, r = low
+    for pos in (np.array([[3.905, 0.27]]), _ahead(scene, 3, 0.27), _ahead(scene, 1, -0.2),
+                np.array([[2.5, 2.5]])):
+        f = r.render(pos, clean=True)
+        near = r._close(np.arange(3), pos).any(axis=1)
+        canvases = r.raster.draw(r.view_projs, pos, bands=np.arange(3), near=near).copy()
+        rgb, labels = r._distort(canvases, np.arange(3))
+        assert np.array_equal(f.labels, labels) and np.array_equal(f.rgb, rgb)
+        assert np.array_equal(r._work, r._canvas)
+
+
+def test_the_hull_keeps_a_person_covering_a_low_camera():
+    """`camtask run` on the repro: hull 0 and no estimate before."""
+    import shapely
+
+    from testbed.loop import LiveSource, LoopConfig, run_loop
+
+    scene = _scene()
+    truth = np.array([[[3.905, 0.27]]] * 2)
+    source = LiveSource(scene, None, np.random.default_rng(0))
+    try:
+        results = list(run_loop(scene, LoopConfig("uniform", 6), truth, source))
+    finally:
+        source.close()
+    assert 3 in results[0].tasked
+    person = shapely.Point(3.905, 0.27).buffer(scene.people.radius)
+    for res in results:
+        assert res.hull_area > 0
+        assert person.difference(shapely.union_all(res.polygons)).area < 0.05 * person.area
