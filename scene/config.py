@@ -31,8 +31,8 @@ from .room import Room
 
 ASSETS = Path(__file__).resolve().parent.parent / "assets"
 #: The widest or tallest image, pixels: OpenGL renders into buffers of at most 16384 a
-#: side on llvmpipe, and every camera's image is drawn a little larger than itself.
-MAX_RESOLUTION = 8192
+#: side on llvmpipe (a larger image could not be drawn at all).
+MAX_RESOLUTION = 16384
 BUILTIN_SCENES = ("lab", "circle")
 BACKENDS = ("egl", "osmesa")
 

@@ -99,7 +99,7 @@ def _set(config, path, value):
     (("cameras", "intrinsics", "resolution"), [0, 480], r"resolution: expected an integer >= 2"),
     (("cameras", "intrinsics", "resolution"), [1, 1], r"resolution: expected an integer >= 2, got 1"),
     (("cameras", "intrinsics", "resolution"), [100000, 100000],
-     r"resolution: expected at most 8192 pixels a side, got 100000 x 100000"),
+     r"resolution: expected at most 16384 pixels a side, got 100000 x 100000"),
     # strings and booleans are not numbers, in arrays either
     (("cameras", "intrinsics", "hfov_deg"), "49", r"hfov_deg: expected a field of view in \(0, 179\] degrees, got '49'"),
     (("cameras", "intrinsics", "distortion"), [True, 0, 0, 0, 0], r"distortion: expected numbers of shape \(5,\), got True"),
