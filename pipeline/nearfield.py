@@ -34,7 +34,7 @@ segment inside it: the rows counted are a lower bound of what its column shows.
 narrower than its kernel, and the spatial and median filters a run of too few columns.
 An object ``w`` metres wide (a person's diameter) at floor distance ``d`` spans bearings
 ``2 asin(w / 2d) >= w / d`` radians; a level virtual camera has at least ``f`` columns
-per radian (``f / (1 + x^2)`` radians per column), and the raw image at least
+per radian (``1 / (f (1 + x^2))`` radians per column), and the raw image at least
 :func:`raw_pixels_per_radian` pixels per radian in any row. So the object shows at least
 ``columns`` rectified columns and ``raw_columns`` raw pixels per row out to
 ``d = w f / columns`` and ``d = w g / raw_columns``: the sight radius is the smaller of
@@ -85,7 +85,8 @@ def raw_pixels_per_radian(camera, rows: int = 33) -> float:
 
 def sight_range(cameras, object_height: float, margin: float = 1.0,
                 width: int | None = None, object_width: float | None = None,
-                columns: float = 1.0, raw_columns: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+                columns: float = 1.0, raw_columns: float = 1.0,
+                pixels_per_radian=None) -> tuple[np.ndarray, np.ndarray]:
     """Per camera, the floor distances (metres) between which an upright object of
     ``object_height`` metres shows at least ``margin`` rows of the rectified image in
     every column (and, given ``object_width``, at least ``columns`` rectified columns and
@@ -99,6 +100,7 @@ def sight_range(cameras, object_height: float, margin: float = 1.0,
     width : output width of the rectification (default the cameras')
     object_width : metres (a person's diameter), or None for no width limit
     columns, raw_columns : how many rectified columns and raw pixels across it must span
+    pixels_per_radian : (n_cams,) :func:`raw_pixels_per_radian` of the cameras, when known
 
     Returns two (n_cams,) float arrays, metres: ``near`` (0 for a camera no higher than
     the object that sees the horizon; ``inf`` where the object is never seen) and
@@ -142,8 +144,8 @@ def sight_range(cameras, object_height: float, margin: float = 1.0,
             hi = np.where(~above & (room < 0), np.minimum(hi, top / room), hi)   # both <= 0
         near[i], far[i] = float(np.max(lo)), float(np.min(hi))
         if object_width is not None:                    # too narrow beyond these
-            far[i] = min(far[i], object_width * K[0, 0] / columns,
-                         object_width * raw_pixels_per_radian(camera) / raw_columns)
+            g = raw_pixels_per_radian(camera) if pixels_per_radian is None else pixels_per_radian[i]
+            far[i] = min(far[i], object_width * K[0, 0] / columns, object_width * g / raw_columns)
         if near[i] >= far[i]:
             near[i], far[i] = np.inf, np.inf
     return near, far

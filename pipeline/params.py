@@ -29,8 +29,9 @@ from scene.checks import check_mapping, check_positive
 from .files import write_atomic
 
 DEFAULT_PATH = Path(__file__).resolve().parent.parent / "assets" / "pipeline" / "default.yaml"
-#: The widest filter, pixels: twice the width of a 4K image. Wider ones change nothing an
-#: image could show, and would only take memory (a 10**5 opening asked for 10 GB).
+#: The widest filter, pixels: more than twice the width of a 4K (3840-pixel) image. Wider
+#: ones change nothing an image could show, and would only take memory (a 10**5 opening
+#: asked for 10 GB).
 MAX_KERNEL = 8191
 
 

@@ -94,7 +94,7 @@ def check_array(name: str, value: Any, shape: tuple[int | None, ...], *, dtype=f
 def _not_a_number(value: Any):
     """The first boolean or string in nested lists (or an array of such), else None."""
     if isinstance(value, np.ndarray):
-        return None if value.dtype.kind in "iuf" else next(iter(value.ravel()), None)
+        return None if value.dtype.kind in "iuf" else _not_a_number(value.ravel().tolist())
     if isinstance(value, (list, tuple)):
         return next((odd for odd in map(_not_a_number, value) if odd is not None), None)
     return value if isinstance(value, (bool, np.bool_, str, bytes)) else None

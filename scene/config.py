@@ -31,8 +31,9 @@ from .room import Room
 
 ASSETS = Path(__file__).resolve().parent.parent / "assets"
 #: The widest or tallest image, pixels: OpenGL renders into buffers of at most 16384 a
-#: side on llvmpipe (a larger image could not be drawn at all).
-MAX_RESOLUTION = 16384
+#: side on llvmpipe, and each camera's canvas adds at least 2 pixels on each side (lens
+#: distortion can ask for more: such a camera is refused when its renderer is built).
+MAX_RESOLUTION = 16380
 BUILTIN_SCENES = ("lab", "circle")
 BACKENDS = ("egl", "osmesa")
 

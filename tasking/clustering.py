@@ -61,18 +61,17 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     """
     # imported here: scikit-learn's import is ~1 s of every command's start
     from sklearn.cluster import KMeans
-    from threadpoolctl import threadpool_limits
 
     feats = np.c_[np.cos(2 * axes), np.sin(2 * axes)]
     distinct = np.unique(np.round(feats, 12), axis=0).shape[0]
     c = min(k, distinct)
-    with threadpool_limits(limits=1):           # the same sums whatever the machine's threads
+    with _one_thread():                         # the same sums whatever the machine's threads
         km = KMeans(n_clusters=c, n_init=10, random_state=seed).fit(feats)
     centres = (np.arctan2(km.cluster_centers_[:, 1], km.cluster_centers_[:, 0]) / 2) % np.pi
     sizes = np.bincount(km.labels_, minlength=c)
     order = np.lexsort((centres, -sizes))
     centres, sizes = centres[order], sizes[order]
-    if _closed_under_quarter_turn(axes):
+    if _closed_under_quarter_turn(feats):
         # every axis has its perpendicular: each solution has a twin turned by pi / 2, of
         # equal inertia, and rounding chose between them (with 1 or 2 OpenMP threads, other
         # cameras): take the one whose centres come first, largest cluster first
@@ -83,11 +82,24 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     return centres, sizes
 
 
-def _closed_under_quarter_turn(axes: np.ndarray) -> bool:
-    """Whether the axial angles (radians modulo pi) turned by pi / 2 are the same multiset."""
-    a = np.sort(np.round(np.asarray(axes, float) % np.pi, 9) % np.round(np.pi, 9))
-    b = np.sort(np.round((np.asarray(axes, float) + np.pi / 2) % np.pi, 9) % np.round(np.pi, 9))
-    return a.shape == b.shape and bool(np.allclose(a, b, atol=1e-8))
+def _closed_under_quarter_turn(feats: np.ndarray) -> bool:
+    """Whether axial angles, as doubled-angle points ``feats`` (s, 2), turned by pi / 2 (the
+    points negated) are the same multiset (compared to 1e-9, without a wrap at pi)."""
+    key = lambda f: f[np.lexsort(f.T[::-1])]
+    return bool(np.allclose(key(np.round(feats, 9)), key(np.round(-feats, 9)), atol=1e-8))
+
+
+_CONTROLLER = None
+
+
+def _one_thread():
+    """A context that holds the BLAS and OpenMP pools to one thread (threadpoolctl's
+    controller, made once: making it looks up the loaded libraries, ~1 ms a call)."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        from threadpoolctl import ThreadpoolController
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER.limit(limits=1)
 
 
 def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:

@@ -70,6 +70,17 @@ def _terminate(signum, frame) -> None:
     raise Terminated
 
 
+def _stdout_closed() -> bool:
+    """Whether standard output is a pipe whose reader has gone."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        return True
+    except (OSError, ValueError):
+        return False
+    return False
+
+
 def main(argv: list[str] | None = None) -> int:
     # OpenCV's own warnings ("findDecoder imread_(...)") would print beside the one-line
     # error a command gives for the same file; set before OpenCV is imported (workers inherit it)
@@ -87,7 +98,10 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, UsageError, FileNotFoundError, FileExistsError) as exc:
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 2
-    except BrokenPipeError:                 # `camtask study ... | head`: the reader has all it wants
+    except BrokenPipeError as exc:          # `camtask study ... | head`: the reader has all it wants
+        if not _stdout_closed():                # a pipe to something else: a real failure
+            print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
+            return 1
         with contextlib.suppress(OSError):
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # no second error at exit
         return 128 + signal.SIGPIPE

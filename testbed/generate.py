@@ -34,15 +34,13 @@ from pathlib import Path
 
 from testbed.checksum import ALGORITHM, ALGORITHMS
 from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode
+from testbed.output import PROBE  # the files check_out and check_workers_share make and remove
 from testbed.parallel import default_workers
 
 MANIFEST = "manifest.json"
 RUN_INFO = "run_info.json"
 #: Locked (``flock``) by the run writing DIR, deleted when it ends; see :func:`exclusive`.
 LOCK = ".camtask-render.lock"
-#: Prefix of the files :func:`check_out` and :func:`check_workers_share` write into DIR and
-#: remove (a killed run may leave one: not content).
-PROBE = ".camtask-probe."
 #: 2: BLAKE3 checksums named by ``checksum``; 1: sha256, no ``checksum`` key (still resumable).
 FORMAT_VERSION = 2
 #: What an episode holds. 3: the sight radii also hold where people become too narrow
@@ -197,18 +195,16 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
     out = Path(out)
     if resume and overwrite:
         raise ValueError("--resume and --overwrite: expected at most one of them")
-    from testbed.output import check_outside_episodes
+    from testbed.output import check_outside_episodes, check_writable
 
     check_outside_episodes("--out", out)
     if out.exists() and not out.is_dir():
         raise FileExistsError(f"--out: {out} exists and is not a directory")
     try:
         out.mkdir(parents=True, exist_ok=True)
-        probe = out / f"{PROBE}write-test.{os.getpid()}"
-        probe.write_bytes(b"")
-        probe.unlink()
     except OSError as exc:
         raise ValueError(f"--out: cannot write to {out} ({exc.strerror or exc})") from None
+    check_writable("--out", out)
     others = sorted(p.name for p in out.iterdir() if p.name != LOCK and not p.name.startswith(PROBE))
     if others and not (resume or overwrite):
         raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "

@@ -50,17 +50,28 @@ def check_output_file(option: str, path: str | os.PathLike, suffix: str | None =
             p.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise ValueError(f"{option}: cannot make the folder {p.parent} ({exc.strerror or exc})") from None
-        probe = p.parent / f".{p.name}.probe.{os.getpid()}"      # os.access says yes to root, even in /proc
-        try:
-            os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
-            probe.unlink()
-        except OSError as exc:
-            raise ValueError(f"{option}: cannot write to {p.parent} ({exc.strerror or exc})") from None
+        check_writable(option, p.parent)
     finally:
         for folder in missing:
             with contextlib.suppress(OSError):
                 folder.rmdir()
     return p
+
+
+#: Prefix of the files :func:`check_writable` (and the dataset writer) create and remove
+#: (a killed run may leave one: not content).
+PROBE = ".camtask-probe."
+
+
+def check_writable(option: str, folder: str | os.PathLike) -> None:
+    """Refuse, naming ``option``, an existing ``folder`` where no file can be created: a
+    file is made there and removed (``os.access`` says yes to root, even in /proc)."""
+    probe = Path(folder) / f"{PROBE}write-test.{os.getpid()}"
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600))   # a stale one of ours: reused
+        probe.unlink()
+    except OSError as exc:
+        raise ValueError(f"{option}: cannot write to {folder} ({exc.strerror or exc})") from None
 
 
 def check_outside_episodes(option: str, out: str | os.PathLike) -> None:

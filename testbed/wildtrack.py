@@ -193,9 +193,12 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
     P = int(meta["people"])
     table = people_table(episode / "people.csv", frames, P)
     made = [f for f in out.parents if not f.exists()]            # deepest first
-    out.parent.mkdir(parents=True, exist_ok=True)
     tmp = None
     try:
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ValueError(f"OUT: cannot make the folder {out.parent} ({exc.strerror or exc})") from None
         tmp = temp_folder(out.parent, f".{out.name}.")
         calibrations = tmp / "calibrations"
         for sub in ("annotations_positions", f"calibrations/{lay.intrinsic}", "calibrations/extrinsic"):
@@ -276,6 +279,7 @@ def _export_camera(episode: Path, meta: dict, number: int, people: int, dest: Pa
     from pipeline.io import read_labels, read_rgb
 
     frames = int(meta["frames"])
+    video = None
     if meta.get("format") == "video":
         from testbed.lossless import read_video
         video = episode / "frames" / f"cam{number:02d}.mkv"
@@ -300,6 +304,7 @@ def _export_camera(episode: Path, meta: dict, number: int, people: int, dest: Pa
         done += 1
         if progress is not None:
             progress(1)
-    if done < frames:
-        raise ValueError(f"video: {video} holds {done} frames; meta.json says {frames}")
+    if video is not None and (done < frames or next(images, None) is not None):
+        raise ValueError(f"video: {video} holds {'more than ' if done == frames else ''}{done} frames; "
+                         f"meta.json says {frames}")
     return out

@@ -60,7 +60,9 @@ def test_ctrl_c_while_pyrender_imports_is_not_swallowed():
 
 
 def test_a_reader_that_stops_reading_ends_the_command_quietly(monkeypatch, capsys):
-    """`camtask study ... | head`: printed "error: [Errno 32] Broken pipe" and exited 1."""
+    """`camtask study ... | head`: printed "error: [Errno 32] Broken pipe" and exited 1. A
+    broken pipe elsewhere (a socket, a subprocess) is still an error."""
+    import io
     import signal
 
     from testbed.commands import study
@@ -68,5 +70,12 @@ def test_a_reader_that_stops_reading_ends_the_command_quietly(monkeypatch, capsy
     def stopped_reading(args):
         raise BrokenPipeError(32, "Broken pipe")
     monkeypatch.setattr(study, "run", stopped_reading)
+    assert cli.main(["study", "cameras"]) == 1                      # stdout is fine
+    assert capsys.readouterr().err == "camtask study: error: [Errno 32] Broken pipe\n"
+
+    class Closed(io.StringIO):
+        def flush(self):
+            raise BrokenPipeError(32, "Broken pipe")
+    monkeypatch.setattr(sys, "stdout", Closed())
     assert cli.main(["study", "cameras"]) == 128 + signal.SIGPIPE
     assert capsys.readouterr().err == ""

@@ -152,6 +152,18 @@ def test_out_inside_another_datasets_episode_or_under_a_file_is_refused(data, tm
     assert sorted(p.name for p in (other / "episode_0000").iterdir()) == []
 
 
+def test_an_out_whose_folders_cannot_be_made_leaves_none_and_proc_is_refused_first(data, tmp_path, capsys):
+    from testbed.commands.export import check_export_out
+
+    out = tmp_path / "newdir" / ("x" * 300) / "out"          # a name too long for the file system
+    assert main(["export", "wildtrack", str(data), str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].startswith(
+        f"camtask export: error: OUT: cannot make the folder {out.parent} (File name too long")
+    assert not (tmp_path / "newdir").exists()
+    with pytest.raises(ValueError, match=r"OUT: cannot write to /proc \("):   # os.access says yes to root
+        check_export_out("/proc/xx", False)
+
+
 def test_out_that_links_to_an_empty_folder_is_written_through(data, tmp_path):
     (tmp_path / "target").mkdir()
     os.symlink(tmp_path / "target", tmp_path / "link")
@@ -173,3 +185,12 @@ def test_truncated_video_is_named(tmp_path, capsys):
     assert err.startswith(f"camtask export: error: video: {video} holds ") and err.endswith("meta.json says 3")
     assert not (tmp_path / "wt").exists()
     assert read_people(ep / "people.csv").size == 9
+    # a video longer than meta.json says is named too (it was cut short without a word)
+    shutil.copy(data / "episode_0000" / "frames" / "cam02.mkv", video)
+    meta = json.loads((ep / "meta.json").read_text())
+    (ep / "meta.json").write_text(json.dumps(meta | {"frames": 2}))
+    lines = (ep / "people.csv").read_text().splitlines()
+    (ep / "people.csv").write_text("\n".join(line for line in lines if not line.startswith("2,")) + "\n")
+    assert main(["export", "wildtrack", str(ep), str(tmp_path / "wt")]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == (
+        f"camtask export: error: video: {video} holds more than 2 frames; meta.json says 2")

@@ -45,6 +45,13 @@ def test_an_output_name_that_names_no_file_is_refused(tmp_path, monkeypatch, nam
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_long_output_name_that_the_file_system_takes_is_taken(tmp_path):
+    """The write probe was named after the file, longer than it: a 250-character name was refused."""
+    name = tmp_path / ("p" * 246 + ".png")
+    assert check_output_file("--plot", name, ".png") == name
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_an_output_where_no_file_can_be_made_is_refused_first():
     with pytest.raises(ValueError, match=r"--out: cannot write to /proc \("):
         check_output_file("--out", "/proc/scanlines.npz")

@@ -99,7 +99,7 @@ def _set(config, path, value):
     (("cameras", "intrinsics", "resolution"), [0, 480], r"resolution: expected an integer >= 2"),
     (("cameras", "intrinsics", "resolution"), [1, 1], r"resolution: expected an integer >= 2, got 1"),
     (("cameras", "intrinsics", "resolution"), [100000, 100000],
-     r"resolution: expected at most 16384 pixels a side, got 100000 x 100000"),
+     r"resolution: expected at most 16380 pixels a side, got 100000 x 100000"),
     # strings and booleans are not numbers, in arrays either
     (("cameras", "intrinsics", "hfov_deg"), "49", r"hfov_deg: expected a field of view in \(0, 179\] degrees, got '49'"),
     (("cameras", "intrinsics", "distortion"), [True, 0, 0, 0, 0], r"distortion: expected numbers of shape \(5,\), got True"),
@@ -199,3 +199,11 @@ def test_no_people_at_given_positions(lab_config):
     config = _set(_set(lab_config, ("people", "count"), 0), ("people", "positions"), [])
     scene = Scene.from_config(config)
     assert scene.people.count == 0 and scene.people.positions.shape == (0, 2)
+
+
+def test_arrays_of_objects_are_judged_by_their_elements():
+    from scene.checks import check_array
+
+    assert check_array("xy", np.array([1.0, 2.0], dtype=object), (None,)).tolist() == [1.0, 2.0]
+    with pytest.raises(ValueError, match=r"xy: expected numbers of shape \(n,\), got 'a'"):
+        check_array("xy", np.array([0, "a"], dtype=object), (None,))

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -97,7 +96,7 @@ def check_export_out(out: str, overwrite: bool) -> None:
     written, or a non-empty folder unless ``overwrite`` and it is an earlier export (it holds
     grid.json): anything else in it is none of ours to delete."""
     from testbed.generate import refuse_foreign
-    from testbed.output import check_outside_episodes
+    from testbed.output import check_outside_episodes, check_writable
 
     o = Path(out)
     if o.exists() and not o.is_dir():
@@ -108,8 +107,9 @@ def check_export_out(out: str, overwrite: bool) -> None:
                          "give a folder beside it")
     check_outside_episodes("OUT", o)
     parent = next(f for f in o.resolve().parents if f.exists())     # the nearest existing folder above OUT
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
-        raise ValueError(f"OUT: cannot make {out} ({parent} is not a writable folder)")
+    if not parent.is_dir():
+        raise ValueError(f"OUT: cannot make {out} ({parent} is not a folder)")
+    check_writable("OUT", parent)
     others = sorted(p.name for p in o.iterdir()) if o.is_dir() else []
     if others and not overwrite:
         raise FileExistsError(f"OUT: {out} exists and is not empty; choose another directory "
