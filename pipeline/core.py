@@ -65,8 +65,8 @@ class Pipeline:
         self._terms: AngleTerms | None = None
         self._state = None
         self._truth = None                     # process_with_truth's buffer, made on first use
-        self._ranges: dict = {}                # sight_range's results, by its arguments (and the
-                                               # cameras' raw pixels per radian)
+        self._ranges: dict = {}                # sight_range's results, by its arguments
+        self._pixels_per_radian = None         # the cameras' raw pixels per radian, for those
         if background is not None:
             self.set_background(background)
 
@@ -100,10 +100,10 @@ class Pipeline:
             else:
                 margin = p.column_threshold / p.temporal_alpha + p.opening_kernel
                 columns, raw_columns = p.spatial_kernel + p.median_kernel // 2 + 1, p.opening_kernel + 1
-            if object_width is not None and "pixels_per_radian" not in self._ranges:
-                self._ranges["pixels_per_radian"] = [raw_pixels_per_radian(c) for c in self.cameras]
+            if object_width is not None and self._pixels_per_radian is None:
+                self._pixels_per_radian = [raw_pixels_per_radian(c) for c in self.cameras]
             near, far = sight_range(self.cameras, object_height, margin, self.rectifier.width, object_width,
-                                    columns, raw_columns, self._ranges.get("pixels_per_radian"))
+                                    columns, raw_columns, self._pixels_per_radian)
             near.setflags(write=False)
             far.setflags(write=False)
             self._ranges[key] = near, far

@@ -74,15 +74,25 @@ def check_writable(option: str, folder: str | os.PathLike) -> None:
         raise ValueError(f"{option}: cannot write to {folder} ({exc.strerror or exc})") from None
 
 
+def episode_of(path: str | os.PathLike, itself: bool = False) -> Path | None:
+    """The episode of a dataset (a folder ``episode_*`` beside a manifest.json) that
+    ``path`` lies in (or, with ``itself``, is), resolved; None when there is none."""
+    from testbed.generate import MANIFEST
+
+    real = Path(path).resolve()
+    for folder in ((real,) if itself else ()) + tuple(real.parents):
+        if folder.name.startswith("episode_") and (folder.parent / MANIFEST).is_file():
+            return folder
+    return None
+
+
 def check_outside_episodes(option: str, out: str | os.PathLike) -> None:
     """Refuse an ``out`` inside an episode of any dataset: its manifest checksums the
     episode's files, so they would fail `camtask verify` and `--resume` would delete them."""
-    from testbed.generate import MANIFEST
-
-    for folder in Path(out).resolve().parents:
-        if folder.name.startswith("episode_") and (folder.parent / MANIFEST).is_file():
-            raise ValueError(f"{option}: {out} is inside {folder}, an episode of the dataset {folder.parent}, whose "
-                             "manifest.json checksums its files; choose a folder outside that dataset")
+    folder = episode_of(out)
+    if folder is not None:
+        raise ValueError(f"{option}: {out} is inside {folder}, an episode of the dataset {folder.parent}, whose "
+                         "manifest.json checksums its files; choose a folder outside that dataset")
 
 
 def save_figure(fig, path: str | os.PathLike, dpi: float = 80) -> None:

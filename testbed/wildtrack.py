@@ -164,13 +164,14 @@ def undistort_maps(K: np.ndarray, dist: np.ndarray, size: tuple[int, int]) -> tu
 
 def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: str = "wildtrack",
                    undistort: bool = False, box: str = "visible",
-                   progress: Callable[[int], None] | None = None) -> Path:
+                   progress: Callable[[int], None] | None = None, people: np.ndarray | None = None) -> Path:
     """Write episode folder ``episode`` to ``out`` in ``layout`` (atomically); return ``out``.
 
     layout : a key of ``LAYOUTS``
     undistort : export pinhole images (and boxes) with zero distortion coefficients
     box : what the boxes bound, one of ``BOXES``
     progress : called with 1 for every image written (from several threads)
+    people : the episode's :func:`people_table`, when the caller has read it already
     Cameras are exported on a thread per core (OpenCV and the PNG encoder release the GIL).
     ``out`` may be a link to a folder (the folder is replaced). Folders made for ``out`` are
     removed again when the export fails.
@@ -191,7 +192,7 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
     room = Scene.from_text(meta["scene_yaml"], source=str(episode / "meta.json")).room
     origin, gw, gh = ground_grid(room.polygon.bounds)
     P = int(meta["people"])
-    table = people_table(episode / "people.csv", frames, P)
+    table = people_table(episode / "people.csv", frames, P) if people is None else people
     made = [f for f in out.parents if not f.exists()]            # deepest first
     tmp = None
     try:

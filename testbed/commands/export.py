@@ -60,11 +60,11 @@ def run(args) -> int:
     check_export_out(args.out, args.overwrite)
     check_intact(episode)
     meta = json.loads((episode / "meta.json").read_text())
-    people_table(episode / "people.csv", int(meta["frames"]), int(meta["people"]))   # before the progress bar
+    people = people_table(episode / "people.csv", int(meta["frames"]), int(meta["people"]))   # before the bar
     with tqdm(total=len(meta["cameras"]) * int(meta["frames"]), desc="export", unit="image", file=sys.stderr,
               dynamic_ncols=True) as bar:
         export_episode(episode, args.out, args.layout, undistort=args.undistort, box=args.boxes,
-                       progress=bar.update)
+                       progress=bar.update, people=people)
     name = {"wildtrack": "WILDTRACK", "multiviewx": "MultiviewX"}[args.layout]
     print(f"wrote {episode} as {name} layout{' (undistorted)' if args.undistort else ''} to {args.out}",
           file=sys.stderr)

@@ -130,8 +130,10 @@ def default_output(root: Path, name: str) -> Path:
     ``camtask verify`` fail and ``camtask render --resume`` render the episode again. That
     is a one-line error asking for ``--out``, raised before any work.
     """
+    from testbed.output import episode_of
+
     real = root.resolve()                           # "." names no episode, its real path does
-    if real.name.startswith("episode_") and (real.parent / "manifest.json").is_file():
+    if episode_of(root, itself=True) == real:
         dataset = root.parent if root.name == real.name else real.parent
         raise ValueError(f"--out: {root} is an episode of the dataset {dataset}, whose manifest.json "
                          f"checksums its files; give --out FILE to write {name} elsewhere")
