@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 
 from scene.camera import Camera
+from scene.checks import check_input_file
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
@@ -30,9 +31,7 @@ def load_calibration(path: str | os.PathLike, number: int | None = None) -> Came
     writes it), else ``camNN`` in the file name, else 1.
     Every problem is a one-line ValueError naming the file and the key.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"calibration: no such file {str(path)!r}")
+    path = check_input_file("calibration", path)
     try:
         fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
         opened = fs.isOpened()

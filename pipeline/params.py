@@ -24,7 +24,7 @@ from typing import Any
 import yaml
 
 from scene import yamlio
-from scene.checks import check_mapping, check_positive
+from scene.checks import check_input_file, check_mapping, check_positive
 
 from .files import write_atomic
 
@@ -105,9 +105,7 @@ class PipelineParams:
     @classmethod
     def from_yaml(cls, path: str | os.PathLike) -> PipelineParams:
         """Parameters from a YAML file (a mapping at top level, or under a ``pipeline`` key)."""
-        path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"params: no such file {str(path)!r}")
+        path = check_input_file("params", path)
         try:
             data = yamlio.load(path.read_text(encoding="utf-8"))
         except UnicodeDecodeError:

@@ -11,7 +11,9 @@ Each ``check_*`` converts its input, checks shape and range, and raises
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -23,6 +25,21 @@ def check_choice(name: str, value: Any, valid: Iterable[str]) -> str:
     if value not in valid:
         raise ValueError(f"{name}: unknown value {value!r}; expected one of {', '.join(valid)}")
     return value
+
+
+def check_input_file(name: str, path: str | os.PathLike) -> Path:
+    """``path`` as a Path if it is a regular file to read, else a one-line error.
+
+    FileNotFoundError when nothing is there; ValueError for a folder or a device.
+    """
+    path = Path(path)
+    if path.is_file():
+        return path
+    if path.is_dir():
+        raise ValueError(f"{name}: {str(path)!r} is a folder, not a file")
+    if path.exists():
+        raise ValueError(f"{name}: {str(path)!r} is not a regular file")
+    raise FileNotFoundError(f"{name}: no such file {str(path)!r}")
 
 
 def _number(name: str, value: Any) -> float:

@@ -22,6 +22,7 @@ from .checks import (
     check_array,
     check_choice,
     check_finite,
+    check_input_file,
     check_int,
     check_mapping,
     check_positive,
@@ -147,9 +148,9 @@ def scene_file(name_or_path: str | Path) -> Path:
 def read_scene_text(path: str | Path) -> str:
     """The text of a scene file; a one-line FileNotFoundError when there is none."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise FileNotFoundError(f"scene file not found: {path}")
-    return path.read_text()
+    return check_input_file("scene file", path).read_text()
 
 
 def scene_path(name: str) -> Path:

@@ -104,8 +104,11 @@ def subset_areas(cov: Coverage, subsets) -> np.ndarray:
     return cov.areas @ ~covered
 
 
-def optimal_subset(cov: Coverage, k: int) -> list:
+def optimal_subset(cov: Coverage, k: int, tol: float = 0.0) -> list:
     """The k-subset with the smallest hull area (ties: first in lexicographic order).
+
+    Scores within ``tol`` (m^2) of the best so far count as tied, so summation noise
+    (~1e-13 m^2 between symmetric subsets) does not pick the winner.
 
     Returns
     -------
@@ -130,7 +133,7 @@ def optimal_subset(cov: Coverage, k: int) -> list:
             scores = uncovered @ areas
         else:
             scores = areas @ ~masks[:, block].any(axis=2)
-        i = int(np.argmin(scores))
-        if scores[i] < best_area:
+        i = int(np.flatnonzero(scores <= scores.min() + tol)[0])
+        if scores[i] < best_area - tol:
             best_area, best = float(scores[i]), block[i].tolist()
     return best

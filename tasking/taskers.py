@@ -219,13 +219,14 @@ def optimal_select(wedges, room: Polygon, k: int) -> list:
 
     Every one of the C(N, k) subsets is scored, but through the coverage table of
     :mod:`tasking.coverage` (a bitmask AND per subset) rather than a polygon overlay.
-    Ties go to the first subset in lexicographic order.
+    Areas within ``LAZY_TOL * room.area`` of the smallest count as tied and the first
+    subset in lexicographic order wins.
 
     Returns
     -------
     list of k ints, sorted.
     """
-    return optimal_subset(coverage_cells(wedges, room), k)
+    return optimal_subset(coverage_cells(wedges, room), k, tol=LAZY_TOL * room.area)
 
 
 def _first_min(areas, tol: float) -> int:

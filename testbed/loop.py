@@ -245,7 +245,8 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
             on_frame(result)
         yield result
         previous = numbers
-        if (t + 1) % config.update_every == 0 and config.tasker != "uniform":
+        last = t + 1 == len(truth)  # no next frame to choose cameras for
+        if (t + 1) % config.update_every == 0 and config.tasker != "uniform" and not last:
             t0 = time.perf_counter()
             estimates = centres
             if config.feedback == "tracks" and len(tracker.estimates()):

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from scene.checks import check_input_file
+
 #: Codec options that make the output depend only on the frames.
 BITEXACT = ["-threads", "1", "-slices", "4", "-level", "3", "-fflags", "+bitexact", "-flags", "+bitexact",
             "-map_metadata", "-1"]
@@ -49,9 +51,7 @@ def read_video(path: str | os.PathLike) -> Iterator[np.ndarray]:
     """Yield the (H, W, 3) uint8 RGB frames of a video written by :class:`VideoWriter`."""
     import imageio_ffmpeg
 
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"video: no such file {str(path)!r}")
+    path = check_input_file("video", path)
     gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24", bits_per_pixel=24)
     meta = next(gen)
     w, h = meta["size"]

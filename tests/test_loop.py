@@ -74,6 +74,19 @@ def test_incremental_swaps_m_cameras_per_update(lab_episode):
             assert changed == 0
 
 
+@pytest.mark.parametrize("update_every", [1, 3])
+def test_the_tasker_runs_only_for_frames_that_follow(lab_episode, monkeypatch, update_every):
+    """Cameras are chosen for the next frame: none after the last one."""
+    import testbed.loop
+
+    scene, truth, source = lab_episode
+    calls = []
+    real = testbed.loop.choose_cameras
+    monkeypatch.setattr(testbed.loop, "choose_cameras", lambda *a, **kw: calls.append(1) or real(*a, **kw))
+    n = len(list(run_loop(scene, LoopConfig("greedy", 6, update_every=update_every), truth, source)))
+    assert len(calls) == 1 + (n - 1) // update_every  # the first frame is uniform
+
+
 def test_bad_loop_arguments(lab_episode):
     scene, truth, source = lab_episode
     with pytest.raises(ValueError, match="k: expected at most 16 cameras"):

@@ -174,6 +174,19 @@ def test_missing_file_and_camera_validation(tmp_path):
         Camera(1, np.eye(3), np.zeros(5), 2 * np.eye(3), np.zeros(3), 640, 480)
 
 
+@pytest.mark.parametrize("kind", ["folder", "device"])
+def test_inputs_that_are_not_files_are_named_as_such(tmp_path, kind):
+    """A folder or /dev/null given as a scene, params or calibration file is not "missing"."""
+    from pipeline.io import load_calibration
+    from pipeline.params import PipelineParams
+
+    path, words = (tmp_path, "is a folder") if kind == "folder" else ("/dev/null", "is not a regular file")
+    for what, load in [("scene file", load_scene), ("params", PipelineParams.from_yaml),
+                       ("calibration", load_calibration)]:
+        with pytest.raises(ValueError, match=f"^{what}: .* {words}"):
+            load(path)
+
+
 def test_cameras_are_in_number_order_whatever_the_files_order(lab_config):
     # the loop, the uniform sets and the top view index cameras by number - 1
     poses = copy.deepcopy(lab_config["cameras"]["poses"])

@@ -138,6 +138,27 @@ def test_optimal_matches_brute_force_over_hulls():
     assert areas[tuple(got)] == pytest.approx(min(areas.values()), rel=1e-9)
 
 
+@pytest.mark.parametrize(
+    "n, fov, centres, k",
+    [
+        (16, np.pi, [[0.0, 0.0]], 1),  # one disc at the centre: all 16 cameras tie
+        (16, np.pi, [[0.0, 0.0]], 3),
+        (12, np.radians(49), np.zeros((0, 2)), 1),
+        (16, np.radians(49), np.zeros((0, 2)), 2),
+    ],
+)
+def test_optimal_ties_go_to_the_first_subset(n, fov, centres, k):
+    """Symmetric rings tie up to ~1e-13 m^2 of summation noise; noise must not pick."""
+    xy, yaw = ring_cameras(n)
+    c = np.asarray(centres, dtype=float).reshape(-1, 2)
+    w = free_wedges_from_discs(xy, yaw, fov, c, R, ROOM)
+    areas = {s: hull_from_wedges(w, ROOM, list(s)).area for s in combinations(range(n), k)}
+    best = min(areas.values())
+    first = next(s for s in combinations(range(n), k) if areas[s] <= best + 1e-9 * ROOM.area)
+    got = choose_cameras("optimal", k, xy, yaw, fov, c, R, ROOM)
+    assert got.tolist() == list(first)
+
+
 def test_naive_greedy_agrees_with_production_greedy():
     xy, yaw, c = drop(7, n=12, m=5)
     w = free_wedges_from_discs(xy, yaw, np.pi, c, R, ROOM)
