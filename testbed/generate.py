@@ -77,11 +77,26 @@ def _manifest_shape_problem(m) -> str | None:
         return f"expected a JSON object, got {type(m).__name__ if m is not None else 'null'}"
     if not isinstance(m.get("episodes"), list):
         return "no list of episodes"
+    for key, least in (("episodes_planned", 0), ("episode_layout", 1)):
+        if key in m and not (_is_int(m[key]) and m[key] >= least):
+            return f"{key} is {m[key]!r}, expected an integer >= {least}"
+    seen = set()
     for i, e in enumerate(m["episodes"]):
-        if not (isinstance(e, dict) and isinstance(e.get("index"), int) and isinstance(e.get("name"), str)
-                and isinstance(e.get("frames"), int) and isinstance(e.get("files"), dict)):
+        if not (isinstance(e, dict) and _is_int(e.get("index")) and isinstance(e.get("name"), str)
+                and _is_int(e.get("frames")) and isinstance(e.get("files"), dict)):
             return f"episodes[{i}] lacks an integer index and frames, a name or a files mapping"
+        if e["index"] < 0:
+            return f"episodes[{i}]: index {e['index']}, expected >= 0"
+        if e["name"] != episode_name(e["index"]):       # a folder of DIR, never a path elsewhere
+            return f"episodes[{i}] is named {e['name']!r}, expected {episode_name(e['index'])!r} for its index"
+        if e["index"] in seen:
+            return f"episodes[{i}]: index {e['index']} listed twice"
+        seen.add(e["index"])
     return None
+
+
+def _is_int(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def manifest(config: EpisodeConfig, episodes: int, entries: dict[int, dict]) -> dict:

@@ -94,10 +94,17 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
         except (OSError, TimeoutError, ValueError) as exc:
             msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({msg})") from None
+        # a lost scheduler is the run's own one-line error; Dask's logs would add a traceback
+        loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client")]
+        levels = [log.level for log in loggers]
         try:
+            for log in loggers:
+                log.setLevel(logging.CRITICAL)
             yield client
         finally:
             client.close()
+            for log, level in zip(loggers, levels, strict=True):
+                log.setLevel(level)
         return
     import dask
 

@@ -89,9 +89,25 @@ def test_a_folder_that_is_not_a_dataset_is_neither_resumed_nor_overwritten(tmp_p
 
 
 def test_unreachable_scheduler(tmp_path, capsys):
-    code, line = run(capsys, "lab", "--out", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:9")
+    code, line = run(capsys, "lab", "--out", str(tmp_path / "new" / "out"), "--scheduler", "tcp://127.0.0.1:9")
     assert code == 2 and "cannot reach a Dask scheduler" in line
-    assert not (tmp_path / "out").exists()                # the folder this run made is gone again
+    assert not (tmp_path / "new").exists()                # the folders this run made are gone again
+
+
+def test_a_lost_scheduler_is_one_line():
+    """The scheduler of an existing cluster dies mid-run: Dask cancels the futures or closes the comm."""
+    from distributed.client import FutureCancelledError
+    from distributed.comm.core import CommClosedError
+
+    from testbed.commands.render import machine_error
+
+    lost = FutureCancelledError("episode-0003", reason="scheduler-connection-lost")
+    closed = CommClosedError("in <TCP (closed) ConnectionPool.gather local=tcp://127.0.0.1:5>: ConnectionResetError")
+    for exc, reason in ((lost, "scheduler-connection-lost"), (closed, "CommClosedError")):
+        assert machine_error(exc, "tcp://10.0.0.5:8786") == (
+            f"--scheduler: lost the connection to tcp://10.0.0.5:8786 ({reason}); episodes running on its "
+            "workers may still finish into temporary folders")
+    assert machine_error(lost) is None                    # a local cluster: not this machine's error
 
 
 def test_full_disk_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
@@ -105,8 +121,8 @@ def test_full_disk_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
     out = tmp_path / "new" / "ds"
     code, line = run(capsys, "lab", "--out", str(out), "--frames", "100", "--workers", "0")
     # 101 x 16 frames of 640 x 480 x 3 bytes at DISK_FRACTION 0.6
-    assert code == 2 and line == f"camtask render: error: --out: 50 MB free on {tmp_path}; one episode needs about 894 MB"
-    assert seen == [tmp_path] and not (tmp_path / "new").exists()
+    assert code == 2 and line == f"camtask render: error: --out: 50 MB free on {out}; one episode needs about 894 MB"
+    assert seen == [out] and not (tmp_path / "new").exists()     # checked once made, then removed again
 
 
 def test_manifest_before_the_first_episode_and_unlisted_folders_removed(tmp_path):

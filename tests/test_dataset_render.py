@@ -306,8 +306,9 @@ def test_resume_reports_its_verification_per_episode(dataset, tmp_path):
     assert sorted(keep) == [0, 1] and calls == [(n, sum(sizes)) for n in sizes]
 
 
-def test_resume_keeps_the_episodes_of_a_sha256_manifest(dataset, tmp_path):
-    """A manifest of format 1 (sha256, no ``checksum`` key): its intact episodes are kept, their checksums renewed."""
+def test_resume_keeps_the_episodes_of_a_sha256_manifest(dataset, tmp_path, capsys):
+    """sha256 digests (no ``checksum`` key) of this layout: intact episodes kept, their checksums renewed;
+    a real format-1 manifest (no ``episode_layout`` either) is verified but not resumed."""
     out = tmp_path / "old"
     shutil.copytree(dataset, out)
     m = json.loads((out / "manifest.json").read_text())
@@ -324,6 +325,14 @@ def test_resume_keeps_the_episodes_of_a_sha256_manifest(dataset, tmp_path):
     old["checksum"] = "md5"
     (out / "manifest.json").write_text(json.dumps(old))
     assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 2
+    del old["checksum"], old["episode_layout"]
+    for e in old["episodes"]:
+        e["files"] = {rel: hashlib.sha256((out / e["name"] / rel).read_bytes()).hexdigest() for rel in e["files"]}
+    (out / "manifest.json").write_text(json.dumps(old))
+    capsys.readouterr()
+    assert main(["verify", str(out)]) == 0 and "2 episodes intact" in capsys.readouterr().out
+    assert main(ARGS + ["--out", str(out), "--workers", "0", "--resume"]) == 2
+    assert "are of layout 1 (an earlier camtask)" in capsys.readouterr().err
 
 
 def test_verify_names_what_differs_from_the_manifest(dataset, tmp_path, capsys):
@@ -351,6 +360,31 @@ def test_verify_names_what_differs_from_the_manifest(dataset, tmp_path, capsys):
     (out / "manifest.json").unlink()
     assert main(["verify", str(out)]) == 2
     assert "no manifest.json" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("change, problem", [
+    ({"episodes_planned": None}, "episodes_planned is None, expected an integer >= 0"),
+    ({"episodes_planned": "many"}, "episodes_planned is 'many', expected an integer >= 0"),
+    ({"episode_layout": [3]}, "episode_layout is [3], expected an integer >= 1"),
+    ({"name": "../elsewhere"}, "episodes[0] is named '../elsewhere', expected 'episode_0000' for its index"),
+    ({"name": "/etc"}, "episodes[0] is named '/etc', expected 'episode_0000' for its index"),
+    ({"index": 1, "name": "episode_0001"}, "episodes[1]: index 1 listed twice"),
+    ({"index": -1}, "episodes[0]: index -1, expected >= 0"),
+])
+def test_a_manifest_with_wrong_values_is_one_line_for_verify_and_resume(dataset, tmp_path, capsys, change, problem):
+    """A manifest's names are folders of DIR: never a path elsewhere (verify hashed /etc, resume skipped work)."""
+    out = tmp_path / "copy"
+    shutil.copytree(dataset, out)
+    m = json.loads((out / "manifest.json").read_text())
+    top = {k: v for k, v in change.items() if k in m}
+    m.update(top)
+    m["episodes"][0].update({k: v for k, v in change.items() if k not in top})
+    (out / "manifest.json").write_text(json.dumps(m))
+    for argv in (["verify", str(out)], ARGS + ["--out", str(out), "--workers", "0", "--resume"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and err.endswith(f"(not a camtask manifest: {problem})")
+    assert files_of(out) == files_of(dataset) | {"manifest.json": files_of(out)["manifest.json"]}
 
 
 def test_video_format_is_lossless(dataset, tmp_path, capsys):

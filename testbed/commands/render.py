@@ -11,6 +11,7 @@ is in :mod:`testbed.generate`, :mod:`testbed.episodes` and docs/dataset.md.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 
@@ -94,10 +95,6 @@ def run(args: argparse.Namespace) -> int:
 
     config, scene = build_config(args)
     out = Path(args.out)
-    if not (args.overwrite or args.resume):          # those free or keep episodes: checked below
-        check_space(out, estimate_bytes(config, scene, 1), "one episode")
-    created = not out.exists()
-    check_out(out, args.resume, args.overwrite)       # refuse before starting a cluster
     workers = args.workers
     if workers is None and args.scheduler is None:
         # one process per core, never more than there are episodes; one episode runs here
@@ -105,12 +102,17 @@ def run(args: argparse.Namespace) -> int:
         workers = 0 if workers == 1 else workers
     elif workers:                                     # a worker more than episodes would only start up
         workers = 0 if args.episodes == 1 else min(workers, args.episodes)   # one episode: in this process
+    made = [f for f in (out, *out.parents) if not f.exists()]   # deepest first
     try:
+        check_out(out, args.resume, args.overwrite)   # refuse before starting a cluster
+        if not (args.overwrite or args.resume):      # those free or keep episodes: checked in _run
+            check_space(out, estimate_bytes(config, scene, 1), "one episode")
         with exclusive(out):                          # until the clean-up after the workers is done
             return _run(args, config, scene, out, workers)
     finally:
-        if created and out.is_dir() and not any(out.iterdir()):
-            out.rmdir()                               # e.g. an unreachable scheduler: leave no trace
+        for folder in made:                           # e.g. an unreachable scheduler: leave no trace
+            with contextlib.suppress(OSError):        # not empty: a run wrote into it
+                folder.rmdir()
 
 
 def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None) -> int:
@@ -173,7 +175,7 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
                 started = True
                 done = generate(config, args.episodes, out, keep, client, progress=bar.update, run_info=info)
     except Exception as exc:                          # a full disk, a lost mount, a worker that kept dying
-        text = machine_error(exc) if started else None
+        text = machine_error(exc, args.scheduler) if started else None
         if text is None:
             raise
         finished = len((read_manifest(out) or {}).get("episodes", []))
@@ -192,9 +194,18 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     return 0
 
 
-def machine_error(exc: BaseException) -> str | None:
-    """One line for an error of the machine rather than a bug: an OSError, or a Dask episode
-    whose workers kept dying (``KilledWorker``, whose own text is a paragraph); else None."""
+def machine_error(exc: BaseException, scheduler: str | None = None) -> str | None:
+    """One line for an error of the machine rather than a bug: an OSError, a Dask episode
+    whose workers kept dying (``KilledWorker``, whose own text is a paragraph), or the lost
+    connection to an existing cluster's ``scheduler``; else None."""
+    if scheduler is not None and "distributed" in sys.modules:
+        from distributed.client import FutureCancelledError
+        from distributed.comm.core import CommClosedError
+
+        if isinstance(exc, (CommClosedError, FutureCancelledError)):
+            reason = getattr(exc, "reason", None) or type(exc).__name__
+            return (f"--scheduler: lost the connection to {scheduler} ({reason}); episodes running on its "
+                    "workers may still finish into temporary folders")
     if isinstance(exc, OSError):
         return str(exc)
     if "distributed" not in sys.modules:          # no cluster was used
