@@ -30,7 +30,8 @@ from pipeline.reference import ReferencePipeline
 def load_data(args):
     if args.dir:
         from pipeline.io import RenderDir
-        r = RenderDir(args.dir)
+        from testbed.commands.scanlines import episode_dir
+        r = RenderDir(episode_dir(Path(args.dir)))        # a render directory, or a dataset of one episode
         n = min(args.frames, len(r))
         return r.cameras, r.background(), np.stack([r.frames(i) for i in range(n)])
     from pipeline.synthetic import synthetic_sequence
@@ -53,7 +54,7 @@ def best_time(make, frames, repeat):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--dir", help="render directory (default: synthetic lab frames)")
+    ap.add_argument("--dir", help="render directory, or a dataset of one episode (default: synthetic lab frames)")
     ap.add_argument("--frames", type=int, default=5)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--json", action="store_true")

@@ -91,6 +91,10 @@ def _closed_under_quarter_turn(feats: np.ndarray) -> bool:
 
 _CONTROLLER = None
 
+#: Axial distances (radians) within this of the nearest count as tied: cameras on one
+#: viewing axis (yaws pi or 2 pi apart) differ by ~1e-15 after ``% pi``.
+AXIS_TOL = 1e-9
+
 
 def _one_thread():
     """A context that holds the BLAS and OpenMP pools to one thread (threadpoolctl's
@@ -106,7 +110,7 @@ def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:
     """Cameras whose viewing axes best match the k-means pair directions.
 
     Cluster centres take turns, largest cluster first, each picking its nearest unused
-    camera (ties: lowest index), until k cameras are chosen; with fewer distinct pair
+    camera (ties, within ``AXIS_TOL`` radians: lowest index), until k cameras are chosen; with fewer distinct pair
     directions than k, centres pick again in the same order.
 
     Parameters
@@ -129,7 +133,7 @@ def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:
             if len(chosen) == k:
                 break
             dist = np.where(used, np.inf, axial_distance(axis, phi))
-            best = int(np.argmin(dist))
+            best = int(np.flatnonzero(dist <= dist.min() + AXIS_TOL)[0])
             used[best] = True
             chosen.append(best)
     return np.sort(np.array(chosen, dtype=np.intp))

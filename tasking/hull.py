@@ -349,13 +349,18 @@ def polygon_centres(polygons) -> np.ndarray:
 
     Returns
     -------
-    (p, 2) float, metres, world frame.
+    (p, 2) float, metres, world frame; a row of NaN for an empty polygon (rows stay
+    aligned with ``polygons``).
 
-    >>> from shapely.geometry import box
-    >>> polygon_centres([box(0, 0, 2, 2)]).tolist()
-    [[1.0, 1.0]]
+    >>> from shapely.geometry import Polygon, box
+    >>> polygon_centres([box(0, 0, 2, 2), Polygon()]).tolist()
+    [[1.0, 1.0], [nan, nan]]
     """
     polys = np.asarray(list(polygons), dtype=object)
     if polys.size == 0:
         return np.empty((0, 2))
-    return shapely.get_coordinates(shapely.centroid(polys)).reshape(-1, 2)
+    centres = shapely.centroid(polys)
+    out = np.full((polys.size, 2), np.nan)
+    full = ~shapely.is_empty(centres)
+    out[full] = shapely.get_coordinates(centres[full]).reshape(-1, 2)
+    return out

@@ -211,9 +211,20 @@ def test_a_low_camera_pitched_up_sees_people_only_up_to_a_distance():
     assert far[0] == pytest.approx(projected_sight_distance(camera, 1.75), abs=4e-3)
 
 
+def test_the_documented_sight_radii_of_the_steep_lab():
+    """docs/pipeline.md and docs/dataset.md quote them (lab intrinsics, principal point included)."""
+    from scene import Scene
+    from scene.config import read_scene_text, scene_path
+
+    steep = Scene.from_text(read_scene_text(scene_path("lab")).replace("pitch_deg: 15.0", "pitch_deg: 40.0"), "steep")
+    pipe = Pipeline(steep.cameras, load_params())
+    np.testing.assert_allclose(pipe.sight_range(1.75, truth=True)[1], 5.72, atol=0.005)
+    np.testing.assert_allclose(pipe.sight_range(1.75)[1], 4.52, atol=0.005)
+
+
 @pytest.mark.render
 def test_hulls_keep_people_beyond_what_steep_cameras_see(lab):
-    """The lab with every camera pitched 40 degrees down: people farther than ~5.8 m from a
+    """The lab with every camera pitched 40 degrees down: people farther than ~5.7 m from a
     camera are above its image. Between the blind and sight radii the true scanlines' hull
     keeps everyone; with the blind radius alone it loses whole people."""
     from render import Renderer

@@ -101,6 +101,8 @@ def test_prune_small_and_centres():
     assert [p.area for p in kept] == [1.0]
     assert polygon_centres(kept).tolist() == [[0.5, 0.5]]
     assert polygon_centres([]).shape == (0, 2)
+    rows = polygon_centres([box(0, 0, 1, 1), Polygon(), box(2, 2, 3, 3)])   # rows stay aligned
+    np.testing.assert_array_equal(rows, [[0.5, 0.5], [np.nan, np.nan], [2.5, 2.5]])
     assert len(prune_small(Polygon(), 0.0)) == 0
 
 

@@ -91,6 +91,19 @@ def test_clustering_picks_the_same_of_two_twin_solutions_whatever_the_order(seed
             np.testing.assert_array_equal(s2, sizes)
 
 
+def test_clustering_ties_between_cameras_on_one_axis_go_to_the_lowest_index():
+    """Opposite cameras of a ring share a viewing axis; ``yaw % pi`` leaves them ~1e-15 apart,
+    which must not decide, and neither may the multiple of 2 pi a yaw is written with."""
+    from tasking.clustering import clustering_select
+
+    _, yaw = ring_cameras(16)                                  # the circle study's rig
+    a = np.radians(30.0)
+    est = np.array([[0.0, 0.0], [0.5 * np.cos(a), 0.5 * np.sin(a)]])   # axes 30 and 120 degrees
+    assert clustering_select(yaw, est, 2, seed=0).tolist() == [1, 5]   # not 9 (1's twin), nor 13
+    for turns in (-1, 1, 3):
+        assert clustering_select(yaw + 2 * np.pi * turns, est, 2, seed=0).tolist() == [1, 5]
+
+
 def test_clustering_falls_back_to_uniform_with_fewer_than_two_estimates():
     xy, yaw = ring_cameras(12)
     uni = choose_cameras("uniform", 4, xy, yaw, np.pi, [[0.1, 0.1]], R, ROOM)
