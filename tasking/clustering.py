@@ -94,6 +94,8 @@ _CONTROLLER = None
 #: Axial distances (radians) within this of the nearest count as tied: cameras on one
 #: viewing axis (yaws pi or 2 pi apart) differ by ~1e-15 after ``% pi``.
 AXIS_TOL = 1e-9
+#: Distances (metres) to the chosen cameras within this of the largest count as tied.
+SPREAD_TOL = 1e-9
 
 
 def _one_thread():
@@ -106,12 +108,16 @@ def _one_thread():
     return _CONTROLLER.limit(limits=1)
 
 
-def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:
+def clustering_select(camera_yaw, estimates, k: int, seed: int, camera_xy=None) -> np.ndarray:
     """Cameras whose viewing axes best match the k-means pair directions.
 
     Cluster centres take turns, largest cluster first, each picking its nearest unused
-    camera (ties, within ``AXIS_TOL`` radians: lowest index), until k cameras are chosen; with fewer distinct pair
-    directions than k, centres pick again in the same order.
+    camera by viewing axis, until k cameras are chosen; with fewer distinct pair
+    directions than k, centres pick again in the same order. Cameras within
+    ``AXIS_TOL`` radians of the nearest axis tie (on a ring, the two cameras facing each
+    other share an axis): with ``camera_xy`` the one farthest from the cameras already
+    chosen wins (within ``SPREAD_TOL`` metres), then the lowest index. Always the lowest
+    index would take every camera from one half of a ring.
 
     Parameters
     ----------
@@ -119,6 +125,7 @@ def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:
     estimates : (p, 2) float, metres, world frame, p >= 2
     k : number of cameras, 1 <= k <= N
     seed : int, k-means random_state
+    camera_xy : (N, 2) float, metres, world frame, or None (ties: lowest index)
 
     Returns
     -------
@@ -126,6 +133,7 @@ def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:
     """
     centres, _ = cluster_axes(pair_axes(estimates), k, seed)
     axis = np.asarray(camera_yaw, dtype=float) % np.pi
+    xy = None if camera_xy is None else np.asarray(camera_xy, dtype=float).reshape(-1, 2)
     used = np.zeros(axis.size, dtype=bool)
     chosen: list[int] = []
     while len(chosen) < k:
@@ -133,7 +141,11 @@ def clustering_select(camera_yaw, estimates, k: int, seed: int) -> np.ndarray:
             if len(chosen) == k:
                 break
             dist = np.where(used, np.inf, axial_distance(axis, phi))
-            best = int(np.flatnonzero(dist <= dist.min() + AXIS_TOL)[0])
+            tied = np.flatnonzero(dist <= dist.min() + AXIS_TOL)
+            if xy is not None and chosen and tied.size > 1:
+                gap = np.linalg.norm(xy[tied, None] - xy[None, chosen], axis=-1).min(axis=1)
+                tied = tied[gap >= gap.max() - SPREAD_TOL]
+            best = int(tied[0])
             used[best] = True
             chosen.append(best)
     return np.sort(np.array(chosen, dtype=np.intp))

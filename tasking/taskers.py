@@ -423,7 +423,7 @@ def choose_cameras(
                                                   m), dtype=np.intp)
     if tasker == "clustering" and pair_axes(estimates).size:
         seed = 0 if rng is None else int(rng.integers(2**31 - 1))
-        return clustering_select(camera_yaw, estimates, k, seed)
+        return clustering_select(camera_yaw, estimates, k, seed, camera_xy=camera_xy)
     if tasker in ("uniform", "clustering"):
         if uniform_sets is not None and k in uniform_sets:
             return check_indices(f"uniform_sets[{k}]", uniform_sets[k], n, size=k)

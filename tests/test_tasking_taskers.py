@@ -104,6 +104,24 @@ def test_clustering_ties_between_cameras_on_one_axis_go_to_the_lowest_index():
         assert clustering_select(yaw + 2 * np.pi * turns, est, 2, seed=0).tolist() == [1, 5]
 
 
+def test_clustering_ties_on_one_axis_go_to_the_camera_farthest_from_those_chosen():
+    """With positions, of two cameras on one axis the one farther from the chosen cameras wins
+    (the lowest index alone took every camera from one half of a ring)."""
+    from tasking.clustering import clustering_select
+
+    xy = np.array([[0.0, 0.0], [1.0, 0.0], [10.0, 0.0]])
+    yaw = np.radians([0.0, 90.0, 270.0])                          # cameras 1 and 2 share the axis 90
+    est = np.array([[0.0, 0.0], [1.0, 0.0]])                      # axes 0 (picked first) and 90
+    assert clustering_select(yaw, est, 2, seed=0).tolist() == [0, 1]
+    assert clustering_select(yaw, est, 2, seed=0, camera_xy=xy).tolist() == [0, 2]
+    ring_xy, ring_yaw = ring_cameras(16)
+    rng = np.random.default_rng(0)
+    for _ in range(20):                                          # a ring: never all from one half
+        c = rng.uniform(-0.6, 0.6, (5, 2))
+        got = choose_cameras("clustering", 6, ring_xy, ring_yaw, np.pi, c, R, ROOM, rng=rng)
+        assert not (np.all(got < 8) or np.all(got >= 8))
+
+
 def test_clustering_falls_back_to_uniform_with_fewer_than_two_estimates():
     xy, yaw = ring_cameras(12)
     uni = choose_cameras("uniform", 4, xy, yaw, np.pi, [[0.1, 0.1]], R, ROOM)
