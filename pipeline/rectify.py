@@ -168,7 +168,7 @@ def float_maps(cameras, width: int | None = None) -> list[tuple[np.ndarray, np.n
     """
     cameras = tuple(cameras)
     Ks, out_h, width = level_cameras(cameras, width)
-    return [rectify_maps(c, K, (width, out_h)) for c, K in zip(cameras, Ks)]
+    return [onto_edge_pixels(*rectify_maps(c, K, (width, out_h)), (c.width, c.height)) for c, K in zip(cameras, Ks)]
 
 
 @dataclass(frozen=True, eq=False)
@@ -281,13 +281,27 @@ def nearest_map(x: np.ndarray, y: np.ndarray, size: tuple[int, int]) -> np.ndarr
     """Integer map (out_h, out_w, 2) int16 of the source pixel nearest each float map entry.
 
     x, y : (out_h, out_w) float32 source column and row; size = (w, h) of the source.
-    Rounded half to even, as ``cv2.remap`` rounds float maps for ``INTER_NEAREST``;
-    (-1, -1) where the rounded pixel is outside the source (or not finite).
+    Entries on the image's outer edge go to the edge pixel (:func:`onto_edge_pixels`),
+    the rest are rounded half to even, as ``cv2.remap`` rounds float maps for
+    ``INTER_NEAREST``; (-1, -1) where the rounded pixel is outside the source (or not
+    finite).
     """
     w, h = size
+    x, y = onto_edge_pixels(x, y, size)
     xi, yi = np.rint(x), np.rint(y)
     inside = (xi >= 0) & (xi <= w - 1) & (yi >= 0) & (yi <= h - 1)
     return np.where(inside[..., None], np.stack([xi, yi], -1), -1).astype(np.int16)
+
+
+def onto_edge_pixels(x: np.ndarray, y: np.ndarray, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Map entries on the image's outer edge (within the edge pixels' half pixel, e.g.
+    x = w - 0.5) moved onto those pixels' centres: rounding half to even sent x = w - 0.5
+    out of the image for an even w, so a level, undistorted camera's last column never
+    saw anything. Others unchanged. x, y : float source column and row; size = (w, h)."""
+    w, h = size
+    x = np.where((x >= -0.5) & (x <= w - 0.5), np.clip(x, 0, w - 1), x).astype(np.float32)
+    y = np.where((y >= -0.5) & (y <= h - 0.5), np.clip(y, 0, h - 1), y).astype(np.float32)
+    return x, y
 
 
 def _envelopes(fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

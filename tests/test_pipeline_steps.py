@@ -426,3 +426,16 @@ def test_with_params_equals_a_pipeline_built_with_them():
     own = Pipeline(cams, PipelineParams(), bg)
     for f in frames:
         np.testing.assert_array_equal(base.process(f), own.process(f))
+
+
+@pytest.mark.parametrize("width", [64, 63, 640])
+def test_a_level_undistorted_camera_sees_into_both_edge_columns(width):
+    """Its band's edge columns sit on the image's outer edges (u = -0.5 and W - 0.5); rounding
+    half to even sent W - 0.5 out of the image for an even W, so column W - 1 never saw."""
+    cam = scene.Camera.from_pose(1, [0.0, 0.0, 1.5], 0.0, 0.0, width, 48, np.radians(50), [0, 0, 0, 0, 0])
+    bg = np.full((1, 48, width, 3), 120, np.uint8)
+    params = PipelineParams(opening_kernel=1, spatial_kernel=1, median_kernel=1, column_threshold=0.5)
+    frame = bg.copy()
+    frame[0, :, width - 3:] = (200, 40, 40)                   # someone cut by the right border
+    for pipe in (Pipeline([cam], params, bg), ReferencePipeline([cam], params, bg)):
+        assert pipe.process(frame)[0].nonzero()[0].tolist() == [width - 3, width - 2, width - 1]
