@@ -281,6 +281,9 @@ class Rasteriser:
         if culling:
             GL.glEnable(GL.GL_CULL_FACE)
         clamped = False
+        # the viewport alone does not hold a band: with depth clamping (no near-plane
+        # clipping) a vertex in the lens plane made llvmpipe draw into the next band
+        GL.glEnable(GL.GL_SCISSOR_TEST)
         try:
             for k, b in enumerate(bands):
                 if cull and near[k] != clamped:          # toggle only where it changes
@@ -289,11 +292,13 @@ class Rasteriser:
                     if culling:
                         (GL.glDisable if clamped else GL.glEnable)(GL.GL_CULL_FACE)
                 GL.glViewport(0, int(b) * self.height, self.width, self.height)
+                GL.glScissor(0, int(b) * self.height, self.width, self.height)
                 GL.glUniformMatrix4fv(self._u_view_proj, 1, GL.GL_TRUE, view_projs[k])
                 GL.glDrawArrays(GL.GL_TRIANGLES, first, count if near[k] else count - near_only)
         finally:
             GL.glDisable(GL.GL_CULL_FACE)
             GL.glDisable(GL.GL_DEPTH_CLAMP)
+            GL.glDisable(GL.GL_SCISSOR_TEST)
 
     def _state(self, GL, page: Page) -> None:
         """The fixed pipeline state of every pass (bound program, VAO and ``page``'s framebuffer)."""

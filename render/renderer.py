@@ -91,8 +91,9 @@ def check_camera_numbers(name: str, numbers, available) -> tuple[int, ...]:
         raise ValueError(f"{name}: expected camera numbers, got {numbers!r}") from None
     bad = [n for n in numbers if n not in available]
     if bad or not numbers or len(set(numbers)) != len(numbers):
-        raise ValueError(f"{name}: expected distinct camera numbers among {available[0]}..{available[-1]}, "
-                         f"got {list(numbers)}")
+        run = available == tuple(range(available[0], available[-1] + 1))
+        among = f"{available[0]}..{available[-1]}" if run else ", ".join(map(str, available))
+        raise ValueError(f"{name}: expected distinct camera numbers among {among}, got {list(numbers)}")
     return numbers
 
 

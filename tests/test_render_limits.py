@@ -146,3 +146,12 @@ render: {{noise_std: 0.0, gain_jitter: 0.0}}
     assert (f.labels == 1).sum(axis=(1, 2)).min() > 1000
     assert np.array_equal(f.rgb, np.concatenate([p.rgb for p in parts]))
     assert np.array_equal(f.labels, np.concatenate([p.labels for p in parts]))
+
+
+def test_camera_numbers_name_the_cameras_that_exist():
+    from render.renderer import check_camera_numbers
+
+    with pytest.raises(ValueError, match=r"^x: expected distinct camera numbers among 1\.\.16, got \[17\]$"):
+        check_camera_numbers("x", [17], range(1, 17))
+    with pytest.raises(ValueError, match=r"among 1, 5, 9, got \[2\]$"):       # a renderer for 1, 5 and 9
+        check_camera_numbers("cameras", [2], (1, 5, 9))

@@ -101,3 +101,25 @@ def test_the_hull_keeps_a_person_covering_a_low_camera():
     for res in results:
         assert res.hull_area > 0
         assert person.difference(shapely.union_all(res.polygons)).area < 0.05 * person.area
+
+
+def test_a_surface_through_a_lens_stays_in_that_cameras_image():
+    """A person's surface exactly through camera 3's lens (axis-aligned camera, prism corner
+    ahead): drawn with depth clamping, its fragments once landed in the next camera's band,
+    and camera 4 showed 41,647 pixels of a person it cannot see."""
+    from render import Renderer
+
+    text = scene_path("lab").read_text()
+    text = text.replace("{number: 3, position: [3.905, 0.05, 2.2], yaw_deg: 101.0, pitch_deg: 15.0}",
+                        "{number: 3, position: [3.905, 0.05, 1.0], yaw_deg: 90.0, pitch_deg: 0.0}")
+    text = text.replace("{number: 4, position: [5.467, 0.05, 2.2], yaw_deg: 126.6, pitch_deg: 15.0}",
+                        "{number: 4, position: [5.0, 0.05, 1.5], yaw_deg: 90.0, pitch_deg: 0.0}")
+    text = text.replace("  count: 3\n", "  count: 2\n").replace("height: 1.75 ", "height: 2.18 ")
+    scene = Scene.from_text(text)
+    assert scene.cameras[3].center_world[2] == 1.5 and scene.people.height == 2.18
+    people = np.array([[3.905, 0.30], [5.6, 0.30]])      # person 1 stands beside camera 4
+    with Renderer(scene, cameras=[3, 4]) as r:
+        both = r.render(people, clean=True).labels
+        alone = r.render(people, cameras=[4], clean=True).labels
+    np.testing.assert_array_equal(both[1], alone[0])
+    assert not (both[1] == 1).any()                       # camera 4 cannot see person 0
