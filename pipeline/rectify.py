@@ -139,9 +139,11 @@ def column_bearings(camera: Camera, K_virtual: np.ndarray, width: int) -> np.nda
 
 
 def rectify_maps(camera: Camera, K_virtual: np.ndarray, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Float maps (out_h, out_w) float32 x (col) and y (row) into the raw image, size = (w, h)."""
-    return cv2.initUndistortRectifyMap(camera.K, camera.dist, level_rotation(camera), K_virtual,
+    """Float maps (out_h, out_w) float32 x (col) and y (row) into the raw image, size = (w, h)
+    of the output; entries on the raw image's outer edge on its edge pixels (:func:`onto_edge_pixels`)."""
+    x, y = cv2.initUndistortRectifyMap(camera.K, camera.dist, level_rotation(camera), K_virtual,
                                        size, cv2.CV_32FC1)
+    return onto_edge_pixels(x, y, (camera.width, camera.height))
 
 
 def level_cameras(cameras, width: int | None = None) -> tuple[np.ndarray, int, int]:
@@ -168,7 +170,7 @@ def float_maps(cameras, width: int | None = None) -> list[tuple[np.ndarray, np.n
     """
     cameras = tuple(cameras)
     Ks, out_h, width = level_cameras(cameras, width)
-    return [onto_edge_pixels(*rectify_maps(c, K, (width, out_h)), (c.width, c.height)) for c, K in zip(cameras, Ks)]
+    return [rectify_maps(c, K, (width, out_h)) for c, K in zip(cameras, Ks)]
 
 
 @dataclass(frozen=True, eq=False)
@@ -281,13 +283,10 @@ def nearest_map(x: np.ndarray, y: np.ndarray, size: tuple[int, int]) -> np.ndarr
     """Integer map (out_h, out_w, 2) int16 of the source pixel nearest each float map entry.
 
     x, y : (out_h, out_w) float32 source column and row; size = (w, h) of the source.
-    Entries on the image's outer edge go to the edge pixel (:func:`onto_edge_pixels`),
-    the rest are rounded half to even, as ``cv2.remap`` rounds float maps for
-    ``INTER_NEAREST``; (-1, -1) where the rounded pixel is outside the source (or not
-    finite).
+    Rounded half to even, as ``cv2.remap`` rounds float maps for ``INTER_NEAREST``;
+    (-1, -1) where the rounded pixel is outside the source (or not finite).
     """
     w, h = size
-    x, y = onto_edge_pixels(x, y, size)
     xi, yi = np.rint(x), np.rint(y)
     inside = (xi >= 0) & (xi <= w - 1) & (yi >= 0) & (yi <= h - 1)
     return np.where(inside[..., None], np.stack([xi, yi], -1), -1).astype(np.int16)

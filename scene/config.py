@@ -146,10 +146,7 @@ def scene_file(name_or_path: str | Path) -> Path:
 
 
 def read_scene_text(path: str | Path) -> str:
-    """The text of a scene file; a one-line FileNotFoundError when there is none."""
-    path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"scene file not found: {path}")
+    """The text of a scene file; a one-line error when it is missing or not a file (:func:`check_input_file`)."""
     return check_input_file("scene file", path).read_text()
 
 

@@ -168,7 +168,7 @@ def test_exponents_without_a_dot_are_numbers(tmp_path):
 
 
 def test_missing_file_and_camera_validation(tmp_path):
-    with pytest.raises(FileNotFoundError, match="scene file not found"):
+    with pytest.raises(FileNotFoundError, match="scene file: no such file"):
         load_scene(tmp_path / "nope.yaml")
     with pytest.raises(ValueError, match="camera.R: expected a rotation matrix"):
         Camera(1, np.eye(3), np.zeros(5), 2 * np.eye(3), np.zeros(3), 640, 480)
