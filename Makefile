@@ -3,18 +3,16 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
-# Off-screen OpenGL through EGL, no display needed (render/gl.py falls back to OSMesa).
-export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: install demo test lint clean gl
+.PHONY: install demo test lint clean debian
 
-install: gl $(STAMP)
+install: debian $(STAMP)
 
-gl:
-	@bash tools/ensure_gl.sh
+debian:
+	@PYTHON=$(PYTHON) bash tools/ensure_debian.sh
 
 $(STAMP): requirements.txt pyproject.toml
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip --version >/dev/null 2>&1 || $(PYTHON) -m venv --clear $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -r requirements.txt
 	$(BIN)/python -m pip install --quiet --no-deps -e .

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from collections import defaultdict
@@ -21,7 +20,6 @@ import numpy as np
 
 # bench/pipeline.py and friends would shadow the packages of the same name
 sys.path[0] = str(Path(__file__).resolve().parent.parent)
-os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 
 def main(argv=None) -> int:

@@ -1,6 +1,6 @@
 """Benchmark one 16-camera render step against the bare OpenGL floor, in one process.
 
-    PYOPENGL_PLATFORM=egl .venv/bin/python bench/render.py [--steps 10] [--json]
+    .venv/bin/python bench/render.py [--steps 10] [--json]
 
 step_ms  : production path, ``Renderer.render``: draw + glReadPixels (RGB and labels in
            one RGBA read) + lens distortion (cv2.remap of the regions the people can

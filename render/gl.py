@@ -7,7 +7,8 @@ directly. One off-screen context is created per process and reused by every rend
 on EGL, deleting one pyrender context tears down the display the others share.
 
 Backends: ``"egl"`` (default, Mesa llvmpipe without a display) and ``"osmesa"`` (pure
-software fallback). When the configured backend's libraries are missing the other is
+software fallback). When the configured backend's libraries are missing (or EGL loads but
+offers no device: ``libegl1`` without ``libegl-mesa0``) the other is
 tried; when neither works, :class:`BackendError` names the missing library and the
 ``apt-get`` line that installs it.
 
@@ -69,11 +70,31 @@ def _load_library(names: tuple[str, ...]) -> str | None:
     return None
 
 
+def _egl_device_count(path: str) -> int:
+    """How many EGL devices libEGL at ``path`` offers (0 when it has no vendor library, e.g.
+    libegl1 without libegl-mesa0): pyrender's EGL platform needs one, and PyOpenGL's platform
+    cannot be switched to OSMesa once pyrender's EGL module has been imported."""
+    egl = ctypes.CDLL(path)
+    egl.eglGetProcAddress.restype = ctypes.c_void_p
+    egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
+    addr = egl.eglGetProcAddress(b"eglQueryDevicesEXT")
+    if not addr:
+        return 0
+    query = ctypes.CFUNCTYPE(ctypes.c_uint, ctypes.c_int, ctypes.c_void_p, ctypes.POINTER(ctypes.c_int))(addr)
+    count = ctypes.c_int(0)
+    if not query(0, None, ctypes.byref(count)):
+        return 0
+    return count.value
+
+
 def probe(backend: str) -> str | None:
     """None when ``backend``'s libraries load, else the name of the missing library."""
     for names in LIBRARIES[backend]:
-        if _load_library(names) is None:
+        path = _load_library(names)
+        if path is None:
             return names[0]
+        if backend == "egl" and names is LIBRARIES["egl"][0] and _egl_device_count(path) == 0:
+            return f"{names[0]} with an EGL device (it loads, but no vendor library offers one: libegl-mesa0 missing?)"
     return None
 
 

@@ -16,6 +16,8 @@ import signal
 import sys
 import threading
 
+from render.gl import BackendError  # no pyrender / PyOpenGL import: only ctypes and scene.checks
+
 #: Command modules, in the order ``camtask --help`` lists them.
 COMMANDS = (
     "testbed.commands.render",
@@ -105,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
         with contextlib.suppress(OSError):
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # no second error at exit
         return 128 + signal.SIGPIPE
-    except (OSError, RunError) as exc:      # the machine, not the input: a full disk, a lost mount
+    except (OSError, RunError, BackendError) as exc:    # the machine, not the input: a full disk, no OpenGL
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 1
     except MemoryError as exc:              # NumPy's says how much it asked for ("Unable to allocate 45 GiB ...")

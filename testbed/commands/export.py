@@ -11,6 +11,8 @@ import json
 import sys
 from pathlib import Path
 
+from testbed.commands import plain_help
+
 #: testbed.wildtrack.LAYOUTS and BOXES (not imported here: it imports OpenCV, and the parser is built at start-up).
 LAYOUTS = ("wildtrack", "multiviewx")
 BOXES = ("visible", "unoccluded")
@@ -19,7 +21,7 @@ BOXES = ("visible", "unoccluded")
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("export", help="export an episode for multi-view detection code (WILDTRACK or "
                                              "MultiviewX layout)",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              description=plain_help(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("layout", choices=LAYOUTS, help="output layout")
     p.add_argument("dir", metavar="DIR", help="dataset folder from `camtask render` (or one episode folder)")
     p.add_argument("out", metavar="OUT", help="output folder (must not exist or be empty)")

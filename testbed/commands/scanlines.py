@@ -24,10 +24,12 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from testbed.commands import plain_help
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("scanlines", help="frames to 640-bit scanlines, with metrics",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              description=plain_help(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("dir", nargs="?", help="render directory (from `camtask render`), or a dataset of one episode")
     p.add_argument("--params", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     p.add_argument("--frames", type=int, help="process at most this many frames")

@@ -13,6 +13,7 @@ import sys
 import time
 
 from testbed.cli import check_seed
+from testbed.commands import plain_help
 from testbed.output import check_output_file
 from testbed.parallel import default_workers, open_client, run_tasks
 
@@ -27,7 +28,7 @@ STUDY_HELP = {
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("study", help="reproduce the paper's simulation figures",
-                              description=__doc__)
+                              description=plain_help(__doc__))
     sub = p.add_subparsers(dest="study", metavar="NAME", required=True)
     for name, text in STUDY_HELP.items():
         sp = sub.add_parser(name, help=text, description=text)

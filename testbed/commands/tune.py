@@ -18,10 +18,12 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from testbed.commands import plain_help
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("tune", help="tune pipeline parameters for scanline F1 (Optuna)",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              description=plain_help(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("dir", help="render directory (from `camtask render`), or a dataset of one episode")
     p.add_argument("--trials", type=int, required=True, help="number of Optuna trials")
     p.add_argument("--seed", type=int, default=0, help="sampler seed (default 0)")

@@ -16,10 +16,12 @@ import argparse
 import sys
 from pathlib import Path
 
+from testbed.commands import plain_help
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("verify", help="check a dataset's files against its manifest.json",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              description=plain_help(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("dir", metavar="DIR", help="dataset folder written by `camtask render`")
     p.set_defaults(func=run)
 
