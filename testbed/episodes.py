@@ -24,6 +24,7 @@ import io
 import json
 import os
 import shutil
+import sys
 import time
 import zipfile
 from collections import OrderedDict
@@ -397,8 +398,14 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
         finally:
             if pool is not None:
                 pool.shutdown(wait=True, cancel_futures=True)
+            closing = None                      # close every writer; the first failure is the one to see
             for v in videos:
-                v.close()
+                try:
+                    v.close()
+                except OSError as exc:
+                    closing = closing or exc
+            if closing is not None and sys.exc_info()[1] is None:
+                raise closing
         loop_end = time.perf_counter()
         with open(tmp / "people.csv", "w", newline="") as fh:
             w = csv.writer(fh)

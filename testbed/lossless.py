@@ -9,6 +9,8 @@ frames give the same bytes (no muxer dates or version strings).
 from __future__ import annotations
 
 import os
+import subprocess
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -21,39 +23,132 @@ BITEXACT = ["-threads", "1", "-slices", "4", "-level", "3", "-fflags", "+bitexac
             "-map_metadata", "-1"]
 
 
+#: Matroska stores timestamps in milliseconds: above this rate two frames share one and ffmpeg drops one.
+MAX_FPS = 1000.0
+
+
+def _ffmpeg() -> str:
+    import imageio_ffmpeg
+
+    try:
+        return imageio_ffmpeg.get_ffmpeg_exe()
+    except RuntimeError as exc:
+        raise OSError(f"ffmpeg: not found ({' '.join(str(exc).split())})") from None
+
+
+def _last_line(log) -> str:
+    log.seek(0)
+    lines = [ln.strip() for ln in log.read().decode("utf-8", "replace").splitlines() if ln.strip()]
+    return lines[-1] if lines else "no message"
+
+
 class VideoWriter:
-    """Append (H, W, 3) uint8 RGB frames to a lossless ``.mkv``; :meth:`close` finishes it."""
+    """Append (H, W, 3) uint8 RGB frames to a lossless ``.mkv``; :meth:`close` finishes it.
+
+    Any failure of ffmpeg (it died, could not write the file: a full disk, a file size
+    limit) is an OSError naming the file, from :meth:`write` or :meth:`close`: the file is
+    complete when :meth:`close` returns.
+    """
 
     def __init__(self, path: str | os.PathLike, width: int, height: int, fps: float):
-        import imageio_ffmpeg
+        from fractions import Fraction
 
         self.path = Path(path)
         self.shape = (int(height), int(width), 3)
-        self._gen = imageio_ffmpeg.write_frames(
-            str(self.path), (int(width), int(height)), fps=float(fps), codec="ffv1", pix_fmt_in="rgb24",
-            pix_fmt_out="bgr0", quality=None, macro_block_size=1, ffmpeg_log_level="error",
-            output_params=BITEXACT)
-        self._gen.send(None)
+        if not 0 < float(fps) <= MAX_FPS:
+            raise ValueError(f"video: Matroska stores milliseconds; expected a frame rate in (0, {MAX_FPS:g}] Hz, got {fps}")
+        rate = str(Fraction(float(fps)).limit_denominator())
+        # the command imageio_ffmpeg.write_frames ran (same bytes), with ffmpeg's exit status checked
+        cmd = [_ffmpeg(), "-y", "-f", "rawvideo", "-vcodec", "rawvideo", "-s", f"{int(width)}x{int(height)}",
+               "-pix_fmt", "rgb24", "-r", rate, "-i", "-", "-an", "-vcodec", "ffv1", "-pix_fmt", "bgr0",
+               "-v", "error"] + BITEXACT + [str(self.path)]
+        self._log = tempfile.TemporaryFile()  # noqa: SIM115 (closed by close())
+        self._proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=self._log,
+                                      start_new_session=True)      # Ctrl-C reaches this process only
+        self.frames = 0
+
+    def _failed(self, what: str) -> OSError:
+        self._proc.kill()
+        code = self._proc.wait()
+        status = f"killed by signal {-code}" if code < 0 else f"exit status {code}"
+        return OSError(f"cannot write {self.path}: ffmpeg {what} ({status}: {_last_line(self._log)})")
 
     def write(self, rgb: np.ndarray) -> None:
         rgb = np.ascontiguousarray(rgb, dtype=np.uint8)
         if rgb.shape != self.shape:
             raise ValueError(f"frame: expected shape {self.shape}, got {rgb.shape}")
-        self._gen.send(rgb)
+        try:
+            self._proc.stdin.write(memoryview(rgb).cast("B"))
+        except OSError:
+            raise self._failed(f"stopped at frame {self.frames}") from None
+        self.frames += 1
 
     def close(self) -> None:
-        if self._gen is not None:
-            self._gen.close()
-            self._gen = None
+        if self._proc is None:
+            return
+        proc, self._proc = self._proc, None
+        try:
+            try:
+                proc.stdin.close()
+            except OSError:
+                pass
+            code = proc.wait()
+        except BaseException:
+            proc.kill()
+            proc.wait()
+            raise
+        if code != 0 or self.frames == 0:
+            self._proc = proc
+            try:
+                raise self._failed(f"failed after {self.frames} frames")
+            finally:
+                self._proc = None
+                self._log.close()
+        self._log.close()
 
 
-def read_video(path: str | os.PathLike) -> Iterator[np.ndarray]:
-    """Yield the (H, W, 3) uint8 RGB frames of a video written by :class:`VideoWriter`."""
+def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[np.ndarray]:
+    """Yield the (H, W, 3) uint8 RGB frames of a video written by :class:`VideoWriter`.
+
+    A file ffmpeg cannot open, a slice whose CRC fails, a truncated file (and, given
+    ``frames``, another number of frames) is a one-line ValueError naming the file, raised
+    once the frames before it are yielded.
+    """
     import imageio_ffmpeg
 
     path = check_input_file("video", path)
-    gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24", bits_per_pixel=24)
-    meta = next(gen)
-    w, h = meta["size"]
-    for raw in gen:
-        yield np.frombuffer(raw, np.uint8).reshape(h, w, 3)
+    header = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")     # the size, from ffmpeg's header
+    try:
+        w, h = next(header)["size"]
+    except (OSError, RuntimeError, KeyError):
+        raise ValueError(f"video: cannot read {str(path)!r} (not a video ffmpeg can open)") from None
+    finally:
+        header.close()
+    size = w * h * 3
+    log = tempfile.TemporaryFile()  # noqa: SIM115 (closed in finally)
+    proc = subprocess.Popen([_ffmpeg(), "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
+                             "-f", "rawvideo", "-pix_fmt", "rgb24", "-"],
+                            stdout=subprocess.PIPE, stderr=log, start_new_session=True)
+    n = 0
+    try:
+        while True:
+            raw = proc.stdout.read(size)
+            if not raw:
+                break
+            if len(raw) < size:
+                raise ValueError(f"video: {str(path)!r}: frame {n} ends early")
+            yield np.frombuffer(raw, np.uint8).reshape(h, w, 3)
+            n += 1
+        code = proc.wait()
+        log.seek(0)
+        if code != 0 or log.read().strip():
+            raise ValueError(f"video: cannot read {str(path)!r} after {n} frames: {_last_line(log)} "
+                             "(truncated or corrupt)")
+        if frames is not None and n != frames:
+            raise ValueError(f"video: {str(path)!r} holds {n} frames; expected {frames}")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait()
+        proc.stdout.close()
+        log.close()

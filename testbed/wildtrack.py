@@ -284,7 +284,7 @@ def _export_camera(episode: Path, meta: dict, number: int, people: int, dest: Pa
     if meta.get("format") == "video":
         from testbed.lossless import read_video
         video = episode / "frames" / f"cam{number:02d}.mkv"
-        images = read_video(video)
+        images = read_video(video, frames)
     else:
         images = (episode / "frames" / f"cam{number:02d}" / f"{f:06d}.png" for f in range(frames))
     folder, find = ("masks", boxes) if box == "visible" else ("silhouettes", silhouette_boxes)

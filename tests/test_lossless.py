@@ -1,0 +1,87 @@
+"""testbed.lossless: a failed ffmpeg is an error, not a short video; corrupt or truncated videos do not read."""
+
+import resource
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from testbed.cli import main
+from testbed.lossless import VideoWriter, read_video
+
+
+def frames(n, seed=0):
+    rng = np.random.default_rng(seed)
+    base = rng.integers(0, 256, (48, 64, 3), dtype=np.uint8)
+    return [np.roll(base, i, axis=1) for i in range(n)]
+
+
+@pytest.fixture()
+def video(tmp_path):
+    path = tmp_path / "v.mkv"
+    w = VideoWriter(path, 64, 48, 7.5)
+    for f in frames(6):
+        w.write(f)
+    w.close()
+    return path
+
+
+def test_round_trip(video):
+    back = list(read_video(video, 6))
+    assert len(back) == 6
+    for a, b in zip(frames(6), back):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_truncated_video_is_an_error(video, tmp_path):
+    data = video.read_bytes()
+    cut = tmp_path / "cut.mkv"
+    cut.write_bytes(data[: int(len(data) * 0.9)])
+    with pytest.raises(ValueError, match="cut.mkv.*truncated or corrupt"):
+        list(read_video(cut))
+
+
+def test_corrupt_slice_is_an_error(video, tmp_path):
+    data = bytearray(video.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    bad = tmp_path / "bad.mkv"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="bad.mkv.*CRC"):
+        list(read_video(bad))
+
+
+def test_not_a_video_is_one_line(tmp_path):
+    bad = tmp_path / "junk.mkv"
+    bad.write_bytes(b"\x00" * 5000)
+    with pytest.raises(ValueError) as err:
+        list(read_video(bad))
+    assert "\n" not in str(err.value) and "junk.mkv" in str(err.value)
+
+
+def test_ffmpeg_failing_at_close_is_an_error(tmp_path):
+    # a file size limit kills ffmpeg when the muxer flushes: the old writer returned normally
+    script = textwrap.dedent(f"""
+        import numpy as np
+        from testbed.lossless import VideoWriter
+        rng = np.random.default_rng(0)
+        w = VideoWriter({str(tmp_path / 'big.mkv')!r}, 640, 480, 7.5)
+        for i in range(4):
+            w.write(rng.integers(0, 256, (480, 640, 3), dtype=np.uint8))
+        w.close()
+    """)
+    limit = lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (500_000, 500_000))
+    run = subprocess.run([sys.executable, "-c", script], preexec_fn=limit, capture_output=True, text=True, check=False)
+    assert run.returncode != 0
+    assert "cannot write" in run.stderr and "big.mkv" in run.stderr
+
+
+def test_frame_rate_above_a_millisecond_is_refused(tmp_path, capsys):
+    from pathlib import Path
+    text = (Path(__file__).parents[1] / "assets" / "scenes" / "lab.yaml").read_text()
+    scene = tmp_path / "fast.yaml"
+    scene.write_text(text.replace("frame_rate: 7.5", "frame_rate: 2000", 1))
+    assert main(["render", str(scene), "--frames", "2", "--cameras", "1", "--format", "video",
+                 "--out", str(tmp_path / "out")]) == 2
+    assert "at most 1000 frames per second" in capsys.readouterr().err
