@@ -225,6 +225,12 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
         raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "
                               "or --overwrite to replace it")
     refuse_foreign(out, others, MANIFEST, "a camtask render dataset", "--resume" if resume else "--overwrite")
+    if overwrite and others:            # the name alone proves nothing (web extensions, PWAs have one)
+        try:
+            read_manifest(out)
+        except ValueError as exc:
+            raise FileExistsError(f"--overwrite: {out} is not a camtask render dataset ({exc}; it holds "
+                                  f"{names(others)}); empty it yourself or choose another folder") from None
     return out
 
 
@@ -267,11 +273,13 @@ def free_bytes(out: Path) -> tuple[int, Path]:
     return shutil.disk_usage(probe).free, probe
 
 
-def check_space(out: Path, need: int, what: str) -> None:
-    """Raise a one-line ValueError when the disk of ``out`` has less than ``need`` bytes free."""
+def check_space(out: Path, need: int, what: str, freed: int = 0) -> None:
+    """Raise a one-line ValueError when the disk of ``out`` has less than ``need`` bytes free,
+    counting ``freed`` bytes that ``--overwrite`` will delete first."""
     free, where = free_bytes(out)
-    if free < need:
-        raise ValueError(f"--out: {size_text(free)} free on {where}; {what} needs about {size_text(need)}")
+    if free + freed < need:
+        also = f" (and {size_text(freed)} that --overwrite would free)" if freed else ""
+        raise ValueError(f"--out: {size_text(free)} free on {where}{also}; {what} needs about {size_text(need)}")
 
 
 def size_text(n: float) -> str:

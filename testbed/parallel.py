@@ -139,6 +139,10 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
             cluster.close()
 
 
+class _BadAddress(Exception):
+    """An address Dask cannot connect to at all (why, in its own words)."""
+
+
 def check_scheduler(address: str, timeout: float) -> None:
     """A one-line ValueError unless a Dask scheduler at ``address`` answers "identity" within
     ``timeout`` seconds. ``Client`` alone waited forever on a port that accepts and never
@@ -151,7 +155,10 @@ def check_scheduler(address: str, timeout: float) -> None:
     security = Security().get_connection_args("client")     # as Client's: the Dask config's TLS settings
 
     async def identity():
-        comm = await connect(address, timeout=timeout, **security)
+        try:
+            comm = await connect(address, timeout=timeout, **security)
+        except (ValueError, TypeError) as exc:      # a malformed address or TLS settings: nothing was sent
+            raise _BadAddress(str(exc).splitlines()[0] if str(exc) else type(exc).__name__) from None
         try:
             await comm.write({"op": "identity", "reply": True})
             return await comm.read()
@@ -160,6 +167,8 @@ def check_scheduler(address: str, timeout: float) -> None:
 
     try:
         reply = asyncio.run(asyncio.wait_for(identity(), timeout))
+    except _BadAddress as exc:
+        raise ValueError(f"scheduler: cannot use the address {address} ({exc})") from None
     except (TimeoutError, OSError) as exc:
         why = str(exc).splitlines()[0] if str(exc) else f"no answer within {timeout:g} s"
         raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({why})") from None

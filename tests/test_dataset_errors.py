@@ -157,12 +157,12 @@ def test_a_folder_another_run_is_writing_is_refused(tmp_path, capsys, mode):
 
     out = tmp_path / "ds"
     out.mkdir()
-    (out / "manifest.json").write_text("{}")
+    (out / "manifest.json").write_text('{"episodes": []}')
     with exclusive(out):                          # as a run in another terminal holds it
         code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", mode)
         assert code == 2 and line == (f"camtask render: error: --out: another camtask render is writing to {out} "
                                       f"(it holds {out / LOCK}); wait for it to finish or stop it")
-        assert (out / "manifest.json").read_text() == "{}" and (out / LOCK).exists()
+        assert (out / "manifest.json").read_text() == '{"episodes": []}' and (out / LOCK).exists()
     assert sorted(p.name for p in out.iterdir()) == ["manifest.json"]   # the holder removed its lock
 
 
@@ -381,3 +381,48 @@ def test_run_info_that_cannot_be_written_does_not_hide_the_error_that_stopped_th
     monkeypatch.setattr(gen, "write_json_atomic", run_info)
     with pytest.raises(OSError, match="000000.png: No space"):
         gen.generate(config, 2, out, {})
+
+
+def test_overwrite_refuses_a_folder_whose_manifest_json_is_not_ours(tmp_path, capsys):
+    """A web extension or PWA has a manifest.json too: --overwrite must not empty it."""
+    out = tmp_path / "extension"
+    (out / "src").mkdir(parents=True)
+    (out / "manifest.json").write_text('{"manifest_version": 3, "name": "mine"}')
+    (out / "src" / "background.js").write_text("x")
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", "--overwrite", "--frames", "1",
+                     "--cameras", "1")
+    assert code == 2 and "is not a camtask render dataset" in line
+    assert (out / "src" / "background.js").read_text() == "x"
+
+
+def test_overwrite_refuses_a_dataset_that_holds_the_runs_scene(tmp_path, capsys):
+    from scene import scene_path
+
+    out = tmp_path / "ds"
+    assert main(["render", "lab", "--out", str(out), "--workers", "0", "--frames", "1", "--cameras", "1"]) == 0
+    scene = out / "myscene.yaml"
+    scene.write_text(scene_path("lab").read_text())
+    code, line = run(capsys, str(scene), "--out", str(out), "--workers", "0", "--overwrite", "--frames", "1",
+                     "--cameras", "1")
+    assert code == 2 and "--overwrite empties" in line
+    assert scene.is_file() and (out / "episode_0000").is_dir()
+
+
+def test_overwrite_without_room_keeps_the_old_dataset(tmp_path, capsys, monkeypatch):
+    import shutil
+    from collections import namedtuple
+
+    out = tmp_path / "ds"
+    assert main(["render", "lab", "--out", str(out), "--workers", "0", "--frames", "1", "--cameras", "1"]) == 0
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**9, 10**9, 1000))
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", "--overwrite", "--frames", "3")
+    assert code == 2 and "one episode" in line
+    assert (out / "episode_0000").is_dir()            # refused before anything was deleted
+
+
+@pytest.mark.parametrize(("address", "why"), [("127.0.0.1", "missing port number"),
+                                              ("http://127.0.0.1:8786", "unknown address scheme 'http'")])
+def test_a_malformed_scheduler_address_says_why(tmp_path, capsys, address, why):
+    code, line = run(capsys, "lab", "--out", str(tmp_path / "out"), "--scheduler", address)
+    assert code == 2 and "cannot use the address" in line and why in line

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import sys
 from pathlib import Path
 
@@ -110,14 +111,37 @@ def run(args: argparse.Namespace) -> int:
     made = [f for f in (out, *out.parents) if not f.exists()]   # deepest first
     try:
         check_out(out, args.resume, args.overwrite)   # refuse before starting a cluster
-        if not (args.overwrite or args.resume):      # those free or keep episodes: checked in _run
-            check_space(out, estimate_bytes(config, scene, 1), "one episode")
+        if args.overwrite:
+            check_inputs_outside(out, args)            # --overwrite would delete the run's own inputs
+        if not args.resume:                           # --resume keeps episodes: checked in _run
+            # what --overwrite deletes counts as free: refused before deleting, not after
+            check_space(out, estimate_bytes(config, scene, 1), "one episode",
+                        freed=tree_bytes(out) if args.overwrite else 0)
         with exclusive(out):                          # until the clean-up after the workers is done
             return _run(args, config, scene, out, workers)
     finally:
         for folder in made:                           # e.g. an unreachable scheduler: leave no trace
             with contextlib.suppress(OSError):        # not empty: a run wrote into it
                 folder.rmdir()
+
+
+def tree_bytes(folder: Path) -> int:
+    """Bytes the files under ``folder`` take on disk (what deleting them frees, about)."""
+    total = 0
+    for root, _, files in os.walk(folder):
+        for name in files:
+            with contextlib.suppress(OSError):
+                total += os.lstat(os.path.join(root, name)).st_blocks * 512
+    return total
+
+
+def check_inputs_outside(out: Path, args: argparse.Namespace) -> None:
+    """Refuse --overwrite of a DIR that holds the scene file or --params file of this run."""
+    top = out.resolve()
+    for option, value in (("SCENE", args.scene), ("--params", args.params)):
+        if value and Path(value).is_file() and top in Path(value).resolve().parents:
+            raise ValueError(f"--overwrite: {option} {value} lies in {out}, which --overwrite empties; "
+                             "move it out of the dataset first")
 
 
 def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None) -> int:
