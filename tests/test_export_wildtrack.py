@@ -95,6 +95,12 @@ def test_export_wildtrack(tmp_path, capsys):
         f"camtask export: error: --overwrite: {tmp_path / 'mine'} is not an export of camtask (no grid.json; "
         "it holds notes.txt); empty it yourself or choose another folder")
     assert [p.name for p in (tmp_path / "mine").iterdir()] == ["notes.txt"]
+    (tmp_path / "mine" / "grid.json").write_text('{"rows": 3}')     # another tool's grid.json: not ours either
+    assert main(["export", "wildtrack", str(data), str(tmp_path / "mine"), "--overwrite"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"camtask export: error: --overwrite: {tmp_path / 'mine'} is not an export of camtask (its grid.json is "
+        "not one; it holds grid.json, notes.txt); empty it yourself or choose another folder")
+    assert sorted(p.name for p in (tmp_path / "mine").iterdir()) == ["grid.json", "notes.txt"]
     assert main(["export", "wildtrack", str(data), str(tmp_path / "x"), "--episode", "5"]) == 2
     with open(ep / "people.csv", "a") as fh:     # a file changed since the manifest: refused
         fh.write("0,9,1.0,1.0,0.25,1.8\n")
