@@ -111,7 +111,7 @@ class PipelineParams:
         except UnicodeDecodeError:
             raise ValueError(f"params: {path} is not UTF-8 text") from None
         except yaml.YAMLError as exc:
-            raise ValueError(f"params: {path} is not valid YAML ({str(exc).splitlines()[0]})") from None
+            raise ValueError(f"params: {path} is not valid YAML ({yamlio.error_text(exc)})") from None
         if isinstance(data, Mapping) and set(data) == {"pipeline"}:
             data = data["pipeline"]
         return cls.from_mapping(data)

@@ -68,7 +68,7 @@ def level_points(camera: Camera, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray
     norm = cv2.undistortPoints(pts, camera.K, camera.dist, None, None, None,
                                (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10))
     rays = np.concatenate([norm.reshape(-1, 2), np.ones((len(pts), 1))], 1) @ level_rotation(camera).T
-    if np.any(rays[:, 2] <= 0.05):
+    if not np.all(rays[:, 2] > 0.05):               # NaN (undistortion failed) too
         raise ValueError(f"camera {camera.number}: field of view too wide, or pitch too steep, to rectify to a level "
                          "camera (every pixel must look less than 87 degrees from the level forward direction: "
                          "check its pitch_deg, hfov_deg and distortion)")
@@ -97,10 +97,11 @@ def check_lens(camera: Camera, samples: int = 33) -> None:
     r = np.linspace(0.0, 1.01 * float(np.hypot(norm[:, 0], norm[:, 1]).max()), 2001)
     slope = 1 + 3 * k1 * r**2 + 5 * k2 * r**4 + 7 * k3 * r**6          # d/dr of the radial factor
     miss = float(np.abs(back - pts.reshape(-1, 2)).max())
-    if miss > ROUND_TRIP or slope.min() <= 0:
+    if not (np.all(np.isfinite(norm)) and miss <= ROUND_TRIP and slope.min() > 0):   # NaN: undistortion failed
+        how = (f"a pixel undistorted and distorted again lands {miss:.1f} pixels away, or rays farther out come "
+               "back nearer the centre") if np.all(np.isfinite(norm)) else "some of its pixels cannot be undistorted"
         raise ValueError(f"camera {camera.number}: its lens distortion {np.round(camera.dist, 4).tolist()} folds over "
-                         f"inside its image (a pixel undistorted and distorted again lands {miss:.1f} pixels away, "
-                         "or rays farther out come back nearer the centre); use smaller distortion coefficients")
+                         f"inside its image ({how}); use smaller distortion coefficients")
 
 
 def check_rectifiable(cameras) -> None:

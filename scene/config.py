@@ -127,7 +127,7 @@ class Scene:
         try:
             config = yamlio.load(text)
         except yaml.YAMLError as exc:
-            raise ValueError(f"{source}: not valid YAML ({str(exc).splitlines()[0]})") from None
+            raise ValueError(f"{source}: not valid YAML ({yamlio.error_text(exc)})") from None
         return _parse_scene(config, source)
 
 
@@ -147,7 +147,12 @@ def scene_file(name_or_path: str | Path) -> Path:
 
 def read_scene_text(path: str | Path) -> str:
     """The text of a scene file; a one-line error when it is missing or not a file (:func:`check_input_file`)."""
-    return check_input_file("scene file", path).read_text()
+    path = check_input_file("scene file", path)
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"scene file: {str(path)!r} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
+                         f"offset {exc.start})") from None
 
 
 def scene_path(name: str) -> Path:
@@ -274,13 +279,8 @@ def _parse_people(cfg: Any, room: Room) -> People:
     radius = check_positive("people.radius", cfg["radius"])
     height = check_positive("people.height", cfg.get("height", 1.75))
     speed = check_positive("people.speed", cfg.get("speed", 1.0))
-    colours = cfg.get("colours")
-    if colours is None:
-        colours = default_colours(count)
-    colours = check_array("people.colours", colours, (None, 3))
-    if len(colours) < count or np.any(colours < 0) or np.any(colours > 255) or np.any(colours != np.round(colours)):
-        raise ValueError(f"people.colours: expected at least {count} RGB triples of integers in 0..255")
-    positions = cfg.get("positions")
+    check_person_fits("people.radius", radius, room)
+    positions = cfg.get("positions")        # before the colours: a count of 10**9 is refused, not allocated
     if positions is None:
         check_people_capacity("people.count", count, radius, room)
     else:
@@ -289,6 +289,12 @@ def _parse_people(cfg: Any, room: Room) -> People:
         positions = check_array("people.positions", positions, (count, 2))
         check_people_fit(positions, radius, room)
         positions = readonly(positions)
+    colours = cfg.get("colours")
+    if colours is None:
+        colours = default_colours(count)
+    colours = check_array("people.colours", colours, (None, 3))
+    if len(colours) < count or np.any(colours < 0) or np.any(colours > 255) or np.any(colours != np.round(colours)):
+        raise ValueError(f"people.colours: expected at least {count} RGB triples of integers in 0..255")
     return People(count, radius, height, speed, readonly(colours[:count].astype(np.uint8)), positions)
 
 
@@ -302,6 +308,12 @@ def check_people_capacity(name: str, count: int, radius: float, room: Room) -> N
     if count > capacity:
         raise ValueError(f"{name}: {count} people of radius {radius:g} m do not fit in the room; "
                          f"expected at most {int(capacity)}")
+
+
+def check_person_fits(name: str, radius: float, room: Room) -> None:
+    """Raise if no disc of ``radius`` metres fits inside ``room`` (a corridor narrower than a person)."""
+    if room.polygon.buffer(-radius).is_empty:
+        raise ValueError(f"{name}: a person of radius {radius:g} m does not fit anywhere in the room")
 
 
 def check_people_fit(positions: np.ndarray, radius: float, room: Room) -> None:

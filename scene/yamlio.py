@@ -18,7 +18,25 @@ import yaml
 
 
 class Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
-    """The safe loader, with YAML 1.2's exponent floats (``1e-3``, ``5E1``, ``1.0e3``)."""
+    """The safe loader, with YAML 1.2's exponent floats (``1e-3``, ``5E1``, ``1.0e3``), that
+    refuses a key given twice in one mapping (YAML requires unique keys; PyYAML keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen = set()
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":      # ``<<: *anchor`` may be overridden
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    duplicate = key in seen
+                except TypeError:                                   # unhashable: PyYAML's own error
+                    break
+                if duplicate:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"duplicate key {key!r}", key_node.start_mark)
+                seen.add(key)
+        return super().construct_mapping(node, deep)
 
 
 Loader.add_implicit_resolver(
@@ -30,3 +48,13 @@ Loader.add_implicit_resolver(
 def load(text: str):
     """The document in ``text``, as :class:`Loader` reads it (raises yaml.YAMLError)."""
     return yaml.load(text, Loader=Loader)
+
+
+def error_text(exc: yaml.YAMLError) -> str:
+    """One line for a YAML error: what is wrong and where (its first line alone, e.g.
+    "while parsing a block mapping", says neither)."""
+    problem = getattr(exc, "problem", None)
+    mark = getattr(exc, "problem_mark", None)
+    if problem is None:
+        return str(exc).splitlines()[0]
+    return problem + ("" if mark is None else f" at line {mark.line + 1}, column {mark.column + 1}")

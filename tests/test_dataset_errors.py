@@ -426,3 +426,22 @@ def test_overwrite_without_room_keeps_the_old_dataset(tmp_path, capsys, monkeypa
 def test_a_malformed_scheduler_address_says_why(tmp_path, capsys, address, why):
     code, line = run(capsys, "lab", "--out", str(tmp_path / "out"), "--scheduler", address)
     assert code == 2 and "cannot use the address" in line and why in line
+
+
+@pytest.mark.render
+def test_bad_input_found_once_started_leaves_out_as_it_was(tmp_path, capsys):
+    """A camera in a corner looking out of the room is found by rendering its background, after
+    the manifest is written: the run left manifest.json and run_info.json, and the same
+    command with the scene fixed was refused as a non-empty --out."""
+    from scene import scene_path
+
+    scene = tmp_path / "corner.yaml"
+    scene.write_text(scene_path("lab").read_text().replace("{number: 4, position: [5.467, 0.05, 2.2]",
+                                                           "{number: 4, position: [0.0, 0.0, 2.2]"))
+    out, mine = tmp_path / "new" / "ds", tmp_path / "mine"
+    mine.mkdir()
+    for folder in (out, mine):
+        code, line = run(capsys, str(scene), "--frames", "1", "--cameras", "4", "--workers", "0", "--out", str(folder))
+        assert code == 2 and line.startswith("camtask render: error: background: camera 4 sees all black")
+    assert not (tmp_path / "new").exists() and list(mine.iterdir()) == []
+    assert run(capsys, "lab", "--frames", "1", "--cameras", "4", "--workers", "0", "--out", str(mine))[0] == 0

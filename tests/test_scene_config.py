@@ -220,3 +220,69 @@ def test_arrays_of_objects_are_judged_by_their_elements():
     assert check_array("xy", np.array([1.0, 2.0], dtype=object), (None,)).tolist() == [1.0, 2.0]
     with pytest.raises(ValueError, match=r"xy: expected numbers of shape \(n,\), got 'a'"):
         check_array("xy", np.array([0, "a"], dtype=object), (None,))
+
+
+# ---- found by reading scene files as a user writes them
+LAB = scene_path("lab").read_text()
+
+
+def test_duplicate_keys_are_refused_not_overridden():
+    with pytest.raises(ValueError, match=r"duplicate key 'frame_rate' at line \d+"):
+        Scene.from_text(LAB + "\nframe_rate: 30\n", "s.yaml")
+    with pytest.raises(ValueError, match=r"duplicate key 'count' at line 43"):
+        Scene.from_text(LAB.replace("  count: 3\n", "  count: 3\n  count: 20\n"), "s.yaml")
+
+
+def test_merge_keys_may_still_be_overridden():
+    text = LAB.replace("    - {number: 1,", "    - &c1 {number: 1,").replace(
+        "    - {number: 2, position: [2.343, 0.05, 2.2], yaw_deg: 70.5, pitch_deg: 15.0}",
+        "    - {<<: *c1, number: 2, position: [2.343, 0.05, 2.2], yaw_deg: 70.5}")
+    assert len(Scene.from_text(text, "s.yaml").cameras) == 16
+
+
+def test_yaml_syntax_error_says_what_and_where():
+    with pytest.raises(ValueError, match=r"not valid YAML \(did not find expected ',' or '\]' at line 16, column \d+\)"):
+        Scene.from_text(LAB.replace("[640, 480]", "[640, 480"), "s.yaml")
+
+
+def test_non_utf8_scene_file_is_one_line_naming_the_file(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_bytes(LAB.replace("name: lab", "name: caf\xe9").encode("latin-1"))
+    with pytest.raises(ValueError, match=r"scene file: '.*s.yaml' is not UTF-8 text \(byte 0xe9"):
+        load_scene(path)
+
+
+def test_huge_people_count_is_refused_without_allocating(monkeypatch):
+    import scene.config
+
+    def colours(count):                       # made for 10**9 people, it filled the memory
+        raise AssertionError(f"default colours made for {count} people before the capacity check")
+
+    monkeypatch.setattr(scene.config, "default_colours", colours)
+    with pytest.raises(ValueError, match=r"people.count: 1000000000 people .* do not fit"):
+        Scene.from_text(LAB.replace("  count: 3\n", "  count: 1000000000\n"), "s.yaml")
+
+
+def test_person_wider_than_the_room_is_refused_on_loading():
+    """Capacity by area alone let one disc wider than a corridor through (an error named ``radii`` came later)."""
+    text = scene_path("circle").read_text().replace("  count: 5\n  radius: 0.1\n", "  count: 1\n  radius: 1.2\n")
+    with pytest.raises(ValueError, match=r"people.radius: a person of radius 1.2 m does not fit anywhere"):
+        Scene.from_text(text, "s.yaml")
+
+
+@pytest.mark.parametrize("dist", [[0, 0, 2.0, 0, 0], [0, 0, 0, -3.0, 0], [0, 0, 1.0, 0, 0]])
+def test_lens_that_cannot_be_undistorted_is_refused(dist):
+    from pipeline.rectify import check_rectifiable
+
+    cam = dataclasses.replace(load_scene("lab").cameras[0], dist=np.array(dist, float))
+    with pytest.raises(ValueError, match="camera 1: its lens distortion .* folds over"):
+        check_rectifiable([cam])
+
+
+def test_params_yaml_syntax_error_says_what_and_where(tmp_path):
+    from pipeline.params import PipelineParams
+
+    path = tmp_path / "p.yaml"
+    path.write_text("angle_deg: [1, 2\n")
+    with pytest.raises(ValueError, match=r"params: .*p.yaml is not valid YAML \(.* at line 2, column 1\)"):
+        PipelineParams.from_yaml(path)

@@ -118,11 +118,31 @@ def run(args: argparse.Namespace) -> int:
             check_space(out, estimate_bytes(config, scene, 1), "one episode",
                         freed=tree_bytes(out) if args.overwrite else 0)
         with exclusive(out):                          # until the clean-up after the workers is done
-            return _run(args, config, scene, out, workers)
+            try:
+                return _run(args, config, scene, out, workers)
+            except ValueError:                        # bad input found once started: a black background
+                if not args.resume:
+                    forget_run(out)
+                raise
     finally:
         for folder in made:                           # e.g. an unreachable scheduler: leave no trace
             with contextlib.suppress(OSError):        # not empty: a run wrote into it
                 folder.rmdir()
+
+
+def forget_run(out: Path) -> None:
+    """Remove the manifest and run_info.json of a run into ``out`` that finished no episode,
+    so that the same command, its input fixed, is not refused as a non-empty ``--out``."""
+    from testbed.generate import MANIFEST, RUN_INFO, read_manifest
+
+    try:
+        manifest = read_manifest(out)
+    except ValueError:
+        return
+    if manifest is not None and not manifest.get("episodes"):
+        for name in (MANIFEST, RUN_INFO):
+            with contextlib.suppress(FileNotFoundError):
+                (out / name).unlink()
 
 
 def tree_bytes(folder: Path) -> int:
