@@ -278,6 +278,8 @@ def _parse_people(cfg: Any, room: Room) -> People:
     count = check_int("people.count", cfg["count"], minimum=0)
     radius = check_positive("people.radius", cfg["radius"])
     height = check_positive("people.height", cfg.get("height", 1.75))
+    if height > room.height:
+        raise ValueError(f"people.height: {height:g} m is above the ceiling ({room.height:g} m, room.height)")
     speed = check_positive("people.speed", cfg.get("speed", 1.0))
     check_person_fits("people.radius", radius, room)
     positions = cfg.get("positions")        # before the colours: a count of 10**9 is refused, not allocated

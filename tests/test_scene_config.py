@@ -286,3 +286,8 @@ def test_params_yaml_syntax_error_says_what_and_where(tmp_path):
     path.write_text("angle_deg: [1, 2\n")
     with pytest.raises(ValueError, match=r"params: .*p.yaml is not valid YAML \(.* at line 2, column 1\)"):
         PipelineParams.from_yaml(path)
+
+
+def test_people_taller_than_the_ceiling_are_refused():
+    with pytest.raises(ValueError, match=r"people.height: 10 m is above the ceiling \(2.7 m, room.height\)"):
+        Scene.from_text(LAB.replace("  height: 1.75 ", "  height: 10.0 "), "s.yaml")
