@@ -1,9 +1,18 @@
 """Shared fixtures: the lab scene and one renderer per test session (one GL context per process)."""
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import settings
 
 from scene import load_scene
+
+# Property tests draw new examples on every local run (that is how they find bugs); under
+# CI they draw the same ones each time, so a red CI means the change, not the draw.
+settings.register_profile("ci", derandomize=True, print_blob=True)
+if os.environ.get("CI"):
+    settings.load_profile("ci")
 
 
 @pytest.fixture(scope="session")

@@ -50,13 +50,19 @@ def test_ctrl_c_while_pyrender_imports_is_not_swallowed():
     from render.gl import signals_held
 
     reached = []
-    with pytest.raises(KeyboardInterrupt), signals_held():
-        try:                                        # what trimesh does with its imports
-            os.kill(os.getpid(), signal.SIGINT)
-        except BaseException:  # noqa: BLE001, S110
-            pass
-        reached.append(True)
-    assert reached == [True] and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    # pytest started with SIGINT ignored (`pytest &` in a script, nohup) inherits SIG_IGN:
+    # the test sends Ctrl-C, so it needs Python's own handler whatever the runner did
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt), signals_held():
+            try:                                        # what trimesh does with its imports
+                os.kill(os.getpid(), signal.SIGINT)
+            except BaseException:  # noqa: BLE001, S110
+                pass
+            reached.append(True)
+        assert reached == [True] and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 def test_a_reader_that_stops_reading_ends_the_command_quietly(monkeypatch, capsys):

@@ -202,3 +202,44 @@ def test_episode_option_that_contradicts_an_episode_dir_is_refused(tmp_path, cap
     assert main(["export", "wildtrack", str(episode), str(tmp_path / "wt"), "--episode", "5"]) == 2
     err = capsys.readouterr().err
     assert "--episode 5: DIR" in err and "is episode 1 itself" in err and not (tmp_path / "wt").exists()
+
+
+@pytest.mark.render
+def test_undistorted_boxes_of_several_people_bound_their_own_undistorted_pixels(tmp_path):
+    """--undistort with several people: each box is that person's label pixels moved to the
+    pinhole image (cv2.undistortPoints, independent of the export's remap), within 2 pixels.
+    Labels remapped bilinearly would blend ids 0 and 3 into 1 and 2 around person 2 and
+    stretch the other people's boxes over it."""
+    import json
+
+    import cv2
+
+    from testbed.cli import main
+    from testbed.dataset import read_calibration
+
+    data, out = tmp_path / "data", tmp_path / "pinhole"
+    assert main(["render", "lab", "--frames", "1", "--seed", "3", "--cameras", "1,6,12", "--out", str(data),
+                 "--workers", "0"]) == 0
+    assert main(["export", "wildtrack", str(data), str(out), "--undistort"]) == 0
+    ep = data / "episode_0000"
+    ann = json.loads((out / "annotations_positions" / "00000000.json").read_text())
+    checked = 0
+    for v, n in enumerate((1, 6, 12)):
+        c = read_calibration(ep / "calibration" / f"cam{n:02d}.yaml")
+        labels = cv2.imread(str(ep / "masks" / f"cam{n:02d}" / "000000.png"), cv2.IMREAD_UNCHANGED)
+        for a in ann:
+            b = a["views"][v]
+            rr, cc = np.nonzero(labels == a["personID"] + 1)
+            if rr.size == 0:
+                continue
+            pts = cv2.undistortPoints(np.c_[cc, rr].astype(float).reshape(-1, 1, 2), c["K"], c["dist"], P=c["K"])
+            pts = pts.reshape(-1, 2)
+            inside = (pts[:, 0] >= -0.5) & (pts[:, 0] < 639.5) & (pts[:, 1] >= -0.5) & (pts[:, 1] < 479.5)
+            if inside.sum() < 50:
+                continue                               # (nearly) all outside the pinhole image
+            pts = pts[inside]
+            want = np.r_[pts.min(0), pts.max(0)]
+            got = np.array([b["xmin"], b["ymin"], b["xmax"], b["ymax"]])
+            assert np.abs(got - want).max() <= 2.0, (n, a["personID"], got, want)
+            checked += 1
+    assert checked >= 3

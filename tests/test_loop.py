@@ -192,6 +192,7 @@ def test_ctrl_c_while_the_video_is_finished_leaves_no_partial_file(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.render
 def test_run_json_is_strict_json_before_any_track_is_confirmed(tmp_path, capsys):
     def no_nan(name):
         raise AssertionError(f"{name} in the JSON document")
@@ -220,6 +221,7 @@ def test_interrupted_run_leaves_no_video(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.render
 def test_demo_writes_its_video_summary_and_top_view_and_same_seed_same_summary(tmp_path, capsys):
     # what `make demo` runs, on fewer frames
     for out in (tmp_path / "a", tmp_path / "b"):
@@ -242,3 +244,33 @@ def test_the_near_field_switch_chooses_where_cameras_carve(lab_episode):
     switched_off = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", 6, near_field=False), truth, near)]
     assert switched_off == plain
     assert all(a >= b - 1e-9 for a, b in zip(carved_late, plain)) and sum(carved_late) > sum(plain)
+
+
+def test_feedback_tracks_tasks_from_the_trackers_predictions(monkeypatch):
+    """docs/network.md: with --feedback tracks "the tracker's confirmed tracks are the
+    estimates instead" of the hull's polygon centres. No test ran feedback="tracks"."""
+    from test_loop import _disc_scanlines
+
+    import testbed.loop
+    from pipeline.rectify import Rectifier
+    from scene import load_scene
+    from testbed.episode import walk
+    from testbed.loop import LoopConfig, PrecomputedSource, run_loop
+
+    scene = load_scene("lab")
+    truth = walk(scene, 8, np.random.default_rng(5))
+    bearings = Rectifier.build(scene.cameras).bearings
+    source = PrecomputedSource(_disc_scanlines(scene, truth, bearings), bearings)
+    given = []
+    real = testbed.loop.choose_cameras
+    monkeypatch.setattr(testbed.loop, "choose_cameras",
+                        lambda *a, **kw: given.append(np.array(a[5])) or real(*a, **kw))
+    results = list(run_loop(scene, LoopConfig("greedy", 8, feedback="tracks"), truth, source))
+    passed = given[1:]                                     # given[0]: the first frame's uniform set
+    assert len(passed) == len(results) - 1
+    confirmed = [i for i, r in enumerate(results[:-1]) if len(r.track_ids)]
+    assert confirmed, "no track confirmed in 8 frames"
+    for i in confirmed:
+        centres = results[i].estimates
+        # predictions of the confirmed tracks, not the polygon centres
+        assert not (passed[i].shape == centres.shape and np.allclose(passed[i], centres))

@@ -16,9 +16,7 @@ def lab_render(tmp_path_factory):
     from testbed.cli import main
 
     out = tmp_path_factory.mktemp("lab") / "render"
-    code = main(["render", "lab", "--frames", "3", "--seed", "5", "--out", str(out), "--workers", "0"])
-    if code != 0:
-        pytest.skip("camtask render failed (no OpenGL backend?)")
+    assert main(["render", "lab", "--frames", "3", "--seed", "5", "--out", str(out), "--workers", "0"]) == 0
     return out / "episode_0000"
 
 

@@ -78,3 +78,28 @@ def test_lab_study_normalised_by_all_cameras(capsys, tmp_path):
     assert all(v >= 1 - 1e-9 for v in recs.values())
     assert doc["all_cameras_residual"] >= 1
     assert png.stat().st_size > 5000
+
+
+@pytest.mark.parametrize("feedback", ["hull", "tracks"])
+def test_tracking_tasks_from_what_feedback_names(monkeypatch, feedback):
+    """--feedback hull tasks from the hull's polygon centres; --feedback tracks from the
+    tracker's predictions once it has tracks (both were the centres when tracks were ignored)."""
+    centres, given = [], []
+    real_centres, real_choose = tracking.core.polygon_centres, tracking.core.choose_cameras
+
+    def spy_centres(polys):
+        centres.append(real_centres(polys))
+        return centres[-1]
+
+    def spy_choose(tasker, k, xy, yaw, fov, estimates, *args, **kwargs):
+        if len(given) < len(centres):             # the first call is the uniform start, before any hull
+            given.append((len(centres) - 1, np.asarray(estimates, float)))
+        return real_choose(tasker, k, xy, yaw, fov, estimates, *args, **kwargs)
+
+    monkeypatch.setattr(tracking.core, "polygon_centres", spy_centres)
+    monkeypatch.setattr(tracking.core, "choose_cameras", spy_choose)
+    opts = {"objects": 3, "steps": 12, "update_every": 1, "m": 1, "radius": 0.1, "speed": 0.3, "feedback": feedback}
+    tracking.run_episode("incremental", 6, opts, 7, 0)
+    assert len(given) == opts["steps"]
+    same = [c.shape == centres[t].shape and np.allclose(c, centres[t]) for t, c in given]
+    assert all(same) if feedback == "hull" else not all(same)

@@ -284,3 +284,62 @@ def test_scanline_errors(bearings, occ, match):
 def test_prune_small_rejects_negative_area():
     with pytest.raises(ValueError, match="min_area"):
         prune_small(SQUARE, -1.0)
+
+
+@pytest.mark.parametrize("behind", [np.pi, np.pi - 0.05, -np.pi + 0.05])
+def test_wide_camera_sees_an_object_straddling_the_direction_behind_it(behind):
+    """A cone that wraps through +-pi (object behind a camera of fov > pi) is clipped on both
+    ends of the field of view: without the 2*pi shifts of clip_to_fov half of it was free."""
+    xy, yaw, fov = np.array([[0.0, 0.0]]), np.array([0.0]), 2 * np.pi - 0.2
+    centre = 0.3 * np.array([np.cos(behind), np.sin(behind)])
+    hull = visual_hull_of_discs(xy, yaw, fov, [centre], R, circle_room())
+    disc = Point(centre).buffer(R, quad_segs=64)
+    assert disc.difference(hull).area < 1e-9
+
+
+def test_a_camera_inside_an_estimated_disc_proves_nothing_empty():
+    """Docs: "a camera inside one is blind" (strict=False). asin(1) = pi/2 would leave it
+    proving the half of its view away from the disc empty."""
+    xy, yaw = ring_cameras(2)
+    inside = xy[0] + [0.0, 0.05]                # 0.05 m beside camera 0 (disc radius 0.1)
+    wedges = free_wedges_from_discs(xy, yaw, np.pi, [inside], R, circle_room(), strict=False)
+    assert wedges[0].is_empty
+    assert not wedges[1].is_empty
+
+
+@pytest.mark.parametrize("near", [0.9, 0.995, 0.999, 0.9999])
+def test_near_and_far_wedges_stay_between_the_two_circles_when_they_nearly_meet(near):
+    """A camera proves empty only what lies between its blind radius and its sight radius,
+    also when the two nearly meet (wedges whose inner chords would cross the outer ones are
+    dropped, not drawn inside out)."""
+    from shapely.geometry import box
+
+    from tasking import visual_hull_of_scanlines
+
+    room = box(-3, -3, 3, 3)
+    bearings = np.linspace(0.4, -0.4, 64)[None]
+    hull = visual_hull_of_scanlines([[0.0, 0.0]], bearings, np.zeros((1, 64), bool), room, near=near, far=1.0)
+    empty = room.difference(hull)
+    assert empty.intersection(Point(0, 0).buffer(near, quad_segs=256)).area < 1e-12
+    assert empty.difference(Point(0, 0).buffer(1.0 + 1e-6, quad_segs=1024)).area < 1e-12   # polygon of the circle: outside it
+
+
+@settings(max_examples=200, deadline=None)
+@given(yaw=st.floats(-np.pi, np.pi), fov=st.floats(0.05, 2 * np.pi - 1e-3),
+       rel=st.lists(st.tuples(st.floats(-np.pi, np.pi), st.floats(0.15, 1.5)), min_size=1, max_size=4))
+def test_free_wedges_never_meet_an_object_whatever_its_bearing(yaw, fov, rel):
+    """The core safety property, drawn in the camera's own frame so that objects behind it,
+    straddling +-pi, and at the edges of fields of view up to 2*pi are all exercised."""
+    from shapely.geometry import box
+
+    room = box(-3, -3, 3, 3)
+    centres = np.array([[d * np.cos(yaw + a), d * np.sin(yaw + a)] for a, d in rel])
+    keep = [0]
+    for i in range(1, len(centres)):                       # disjoint discs only
+        if np.all(np.hypot(*(centres[keep] - centres[i]).T) > 2 * R):
+            keep.append(i)
+    centres = centres[keep]
+    wedges = free_wedges_from_discs([[0.0, 0.0]], [yaw], fov, centres, R, room)
+    for c in centres:
+        disc = Point(c).buffer(R * (1 - 1e-9), quad_segs=32)    # inscribed polygon, just inside
+        assert wedges[0].intersection(disc).area < 1e-12

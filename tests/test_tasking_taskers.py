@@ -471,3 +471,54 @@ def test_greedy_ties_go_to_the_lowest_index_whatever_the_rounding():
     xy, yaw = core.circle_cameras(8)
     for tasker in ("greedy", "lazy_greedy", "optimal"):
         assert choose_cameras(tasker, 3, xy, yaw, core.FOV, np.zeros((0, 2)), 0.1, room).tolist() == [0, 1, 2]
+
+
+def test_optimal_ties_go_to_the_first_subset_across_scoring_blocks(monkeypatch):
+    """Ties are broken in lexicographic order over all C(n, k) subsets, not only inside one
+    block of CHUNK subsets (the lab's C(16, 8) = 12870 spans four blocks)."""
+    from tasking import choose_cameras, coverage
+
+    monkeypatch.setattr(coverage, "CHUNK", 7)
+    xy, yaw = ring_cameras(12)
+    got = choose_cameras("optimal", 2, xy, yaw, np.radians(49), np.zeros((0, 2)), R, ROOM)
+    monkeypatch.setattr(coverage, "CHUNK", 4096)
+    assert got.tolist() == choose_cameras("optimal", 2, xy, yaw, np.radians(49), np.zeros((0, 2)), R,
+                                          ROOM).tolist()
+
+
+def test_incremental_tasker_updates_exactly_on_multiples_of_update_every(monkeypatch):
+    from tasking import taskers
+
+    frames = []
+    real = taskers.choose_cameras
+
+    def spy(*a, **kw):
+        frames.append(current_frame[0])
+        return real(*a, **kw)
+
+    monkeypatch.setattr(taskers, "choose_cameras", spy)
+    xy, yaw = ring_cameras(12)
+    est = np.array([[0.2, 0.1], [-0.3, 0.2]])
+    tasker = IncrementalTasker(k=4, m=1, update_every=3)
+    current_frame = [None]
+    for f in range(8):
+        current_frame[0] = f
+        tasker.step(f, xy, yaw, np.pi, est, R, ROOM)
+    assert frames == [0, 3, 6]
+
+
+def test_non_convex_room_incremental_swaps_to_a_smaller_hull():
+    """The polygon path (a room that is not convex) must actually swap: returning ``current``
+    unchanged passed test_non_convex_room_uses_the_polygon_path, which checks only the size."""
+    from shapely.geometry import box
+
+    from tasking import choose_cameras, hull_from_wedges
+
+    room = box(0, 0, 2, 2).difference(box(1, 1, 2, 2))
+    xy = np.array([[0.0, 0.5], [0.5, 0.0], [2.0, 0.5], [0.5, 2.0]])
+    yaw = np.array([0.0, np.pi / 2, np.pi, -np.pi / 2])
+    w = free_wedges_from_discs(xy, yaw, np.pi, [[0.5, 0.5]], R, room, strict=False)
+    for current in ([0, 2], [1, 3]):
+        got = choose_cameras("incremental", 2, xy, yaw, np.pi, [[0.5, 0.5]], R, room, current=current, m=1)
+        assert got.tolist() == [2, 3]
+        assert hull_from_wedges(w, room, got).area < 0.25 * hull_from_wedges(w, room, current).area

@@ -77,3 +77,39 @@ def test_metrics_on_a_hand_computed_case():
     assert m["mota"] == pytest.approx(1 - (1 + 1) / 6)   # one miss, one false positive
     with pytest.raises(ValueError, match="same number of frames"):
         tracking_metrics(truth_ids, truth_xy, track_ids[:2], track_xy, 0.5)
+
+
+def test_metrics_gate_is_a_distance_not_a_squared_distance():
+    # 0.6 m away with max_distance 0.5 m: no match (0.36 m^2 is below 0.5, above 0.25)
+    m = tracking_metrics([[0]], [[[0.0, 0.0]]], [[7]], [[[0.6, 0.0]]], 0.5)
+    assert m["matches"] == 0 and m["mota"] == -1.0 and np.isnan(m["mse"])
+
+
+def test_metrics_with_a_miss_and_an_identity_switch():
+    # one object over 4 frames: tracked by 7, 7, missed, then by 8 (a switch)
+    z = [[0.0, 0.0]]
+    m = tracking_metrics([[0]] * 4, [z] * 4, [[7], [7], [], [8]], [[[0.1, 0.0]], [[0.1, 0.0]], [], [[0.2, 0.0]]], 0.5)
+    assert m["switches"] == 1
+    assert m["mse"] == pytest.approx((0.01 + 0.01 + 0.04) / 3)      # the switch frame is matched too
+    assert m["motp"] == pytest.approx(0.4 / 3)
+    assert m["mota"] == pytest.approx(1 - (1 + 1) / 4)              # 1 miss, 1 switch, 4 objects
+    assert m["idf1"] == pytest.approx(2 * 2 / (2 * 2 + 1 + 2))     # IDTP 2 (0<->7), IDFP 1, IDFN 2
+
+
+def test_a_track_is_confirmed_on_its_confirm_hits_th_consecutive_match():
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=3))
+    assert [len(tracker.step([[1.0, 1.0]])[0]) for _ in range(4)] == [0, 0, 1, 1]
+
+
+def test_a_tentative_track_that_misses_once_is_dropped():
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=2, max_missed=3))
+    tracker.step([[1.0, 1.0]])
+    tracker.step(np.zeros((0, 2)))
+    assert tracker.ids.size == 0
+
+
+def test_estimates_are_next_frame_predictions():
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=2))
+    for t in range(30):
+        tracker.step([[0.1 * t, 0.0]])              # 1 m/s along x
+    np.testing.assert_allclose(tracker.estimates(), [[3.0, 0.0]], atol=0.01)
