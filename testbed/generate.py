@@ -181,16 +181,18 @@ def episode_problems(out: Path, entry: dict, algorithm: str = ALGORITHM) -> dict
     """What differs between ``out/entry['name']`` and its manifest entry.
 
     Returns {"missing": listed files not on disk, "changed": files whose checksum differs,
-    "extra": files on disk not listed}, each a sorted list of paths relative to the
+    "extra": files on disk not listed, and any other entry but a folder (a FIFO, a link to
+    nowhere or to itself: never read)}, each a sorted list of paths relative to the
     episode folder; all empty when the episode is intact. A missing folder has every
     listed file missing.
     """
     folder = Path(out) / entry["name"]
     listed = entry["files"]
-    found = checksums(folder, algorithm=algorithm) if folder.is_dir() else {}
+    others: list[str] = []                  # a FIFO, a link to nowhere: never read, always extra
+    found = checksums(folder, algorithm=algorithm, others=others) if folder.is_dir() else {}
     return {"missing": sorted(set(listed) - set(found)),
             "changed": sorted(k for k in found if k in listed and found[k] != listed[k]),
-            "extra": sorted(set(found) - set(listed))}
+            "extra": sorted((set(found) - set(listed)) | set(others))}
 
 
 def problems_text(problems: dict[str, list[str]]) -> str:

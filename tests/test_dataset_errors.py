@@ -445,3 +445,21 @@ def test_bad_input_found_once_started_leaves_out_as_it_was(tmp_path, capsys):
         assert code == 2 and line.startswith("camtask render: error: background: camera 4 sees all black")
     assert not (tmp_path / "new").exists() and list(mine.iterdir()) == []
     assert run(capsys, "lab", "--frames", "1", "--cameras", "4", "--workers", "0", "--out", str(mine))[0] == 0
+
+
+def test_verify_names_links_to_nowhere_loops_and_fifos_without_reading_them(tmp_path):
+    """A link to itself stopped verify with ELOOP; a FIFO or a dangling link went unreported."""
+    from testbed.episodes import checksums
+    from testbed.generate import episode_problems
+
+    ep = tmp_path / "episode_0000"
+    (ep / "masks").mkdir(parents=True)
+    (ep / "people.csv").write_text("frame\n")
+    (ep / "masks" / "a.png").write_bytes(b"png")
+    entry = {"name": ep.name, "files": checksums(ep)}
+    assert episode_problems(tmp_path, entry) == {"missing": [], "changed": [], "extra": []}
+    (ep / "masks" / "loop").symlink_to("loop")
+    (ep / "gone").symlink_to(tmp_path / "nowhere")
+    os.mkfifo(ep / "fifo")                        # reading it would wait forever
+    assert episode_problems(tmp_path, entry) == {"missing": [], "changed": [],
+                                                 "extra": ["fifo", "gone", "masks/loop"]}
