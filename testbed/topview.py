@@ -55,7 +55,8 @@ class TopView:
             b = bearings[n]
             mask = np.zeros((self.height, self.width), np.uint8)
             for lo, hi in _runs(scan):
-                fan = np.linspace(b[lo], b[hi - 1], 8)
+                run = np.unwrap(b[lo:hi])       # a field of view may cross +-pi (lab cameras 6, 7)
+                fan = np.linspace(run[0], run[-1], 8)
                 pts = np.vstack([c, c + reach * np.column_stack([np.cos(fan), np.sin(fan)])])
                 cv2.fillPoly(mask, [self.px(pts)], 1)
             shade += mask

@@ -20,7 +20,8 @@ class VideoWriter:
         from testbed.output import check_output_file
 
         self.path = check_output_file("--video", path, ".mp4")
-        self.tmp = self.path.with_name(f".{self.path.stem}.partial{self.path.suffix}")
+        # a name of this run's own: two runs given one --video must not write into one file
+        self.tmp = self.path.with_name(f".{self.path.stem}.partial-{os.getpid()}-{os.urandom(4).hex()}{self.path.suffix}")
         self.fps = fps
         self._ffmpeg = imageio_ffmpeg
         self._gen = None

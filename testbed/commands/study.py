@@ -21,7 +21,7 @@ STUDY_HELP = {
     "cameras": "residual vs number of cameras and objects (paper figs 5, 6)",
     "static": "taskers on static objects (paper fig 8)",
     "moving": "taskers on walking objects, update rates (paper figs 9, 10)",
-    "lab": "taskers on the rendered lab, normalised by all 16 cameras (paper fig 13)",
+    "lab": "taskers on the rendered lab (or --scene), normalised by all its cameras (paper fig 13)",
     "tracking": "tracking with tasked vs uniform cameras (paper section 6, fig 14)",
 }
 

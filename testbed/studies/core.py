@@ -169,6 +169,7 @@ def plot_taskers(records: list[dict], path: str, title: str, ylabel: str, *, log
     if log:
         ax.set_yscale("log")
     ax.set(xlabel="number of cameras tasked k", ylabel=ylabel, title=title)
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))   # k is a count
     ax.legend()
     fig.tight_layout()
     save_figure(fig, path)

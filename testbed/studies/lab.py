@@ -10,6 +10,8 @@ reached with all 16 cameras over the run.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from . import core
@@ -86,7 +88,7 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
         for k in opts["k"]:
             config = LoopConfig(tasker, k, opts["m"], opts["update_every"], near_field=near_field)
             areas[f"{tasker}:{k}"] = float(np.mean([r.hull_area for r in run_loop(scene, config, truth, source)]))
-    return {"areas": areas, "min_full": float(np.min(full)), "mean_full": float(np.mean(full))}
+    return {"areas": areas, "min_full": float(np.min(full)), "mean_full": float(np.mean(full)), "cameras": n}
 
 
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
@@ -102,16 +104,19 @@ def run(opts: dict, trials: int, seed: int, runner) -> dict:
             mean, sem = core.mean_sem(values)
             records.append({"tasker": tasker, "k": k, "residual": mean, "residual_sem": sem, "trials": trials})
     full = float(np.mean([t["mean_full"] / t["min_full"] for t in per_trial]))
-    return {"records": records, "all_cameras_residual": full}
+    return {"records": records, "all_cameras_residual": full, "cameras": per_trial[0]["cameras"],
+            "scene": Path(opts["scene"]).stem}
 
 
 def format_table(result: dict) -> str:
-    title = "Normalised residual hull area on the rendered lab (hull area / min 16-camera area):"
+    n = result["cameras"]
+    title = f"Normalised residual hull area on {result['scene']} (hull area / min {n}-camera area):"
     return (core.tasker_table(result["records"], title, digits=3)
-            + f"\nall 16 cameras: {result['all_cameras_residual']:.3f}")
+            + f"\nall {n} cameras: {result['all_cameras_residual']:.3f}")
 
 
 def plot(result: dict, path: str) -> None:
-    core.plot_taskers(result["records"], path, "Fig. 13: taskers on the rendered lab",
-                      "hull area / min 16-camera area",
-                      reference=(result["all_cameras_residual"], "all 16 cameras"))
+    n = result["cameras"]
+    core.plot_taskers(result["records"], path, f"Fig. 13: taskers on the rendered {result['scene']}",
+                      f"hull area / min {n}-camera area",
+                      reference=(result["all_cameras_residual"], f"all {n} cameras"))

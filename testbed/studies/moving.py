@@ -142,11 +142,13 @@ def plot(result: dict, path: str) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     cols = list(dict.fromkeys((r["tasker"], r["update_every"]) for r in recs))
 
+    colours = {c: f"C{i % 10}" for i, c in enumerate(cols)}   # one colour per series in both panels
+
     def draw(ax, tasker, u, **kw):
         rs = [r for r in recs if r["tasker"] == tasker and r["update_every"] == u]
         ax.errorbar([r["k"] for r in rs], [r["residual"] for r in rs],
                     yerr=[r["residual_sem"] for r in rs], marker="o", capsize=3,
-                    label=_label(tasker, u), **kw)
+                    label=_label(tasker, u), color=colours[(tasker, u)], **kw)
 
     for tasker, u in cols:
         if tasker != "incremental" or u == min(c[1] for c in cols if c[0] == "incremental"):
@@ -159,6 +161,7 @@ def plot(result: dict, path: str) -> None:
                 xlabel="number of cameras tasked k")
     for ax in axes:
         ax.set_yscale("log")
+        ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))   # k is a count
         if ax.has_data():
             ax.legend()
         else:                                   # fig. 10 needs incremental or uniform among --taskers
