@@ -270,6 +270,8 @@ def summarise(results: list[FrameResult], scene: Scene) -> dict:
         max_distance=tracker_params(scene).gate) if n and people else {}
     # no matched position, no mean error: null in JSON, which has no NaN
     tracking = {k: None if isinstance(v, float) and not np.isfinite(v) else v for k, v in tracking.items()}
+    if tracking:
+        tracking["max_distance"] = tracker_params(scene).gate     # metres, the metric's matching distance
     return {
         "frames": n,
         "hull_area": float(np.mean([r.hull_area for r in results])) if n else float("nan"),

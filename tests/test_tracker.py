@@ -113,3 +113,15 @@ def test_estimates_are_next_frame_predictions():
     for t in range(30):
         tracker.step([[0.1 * t, 0.0]])              # 1 m/s along x
     np.testing.assert_allclose(tracker.estimates(), [[3.0, 0.0]], atol=0.01)
+
+
+def test_metrics_count_false_positives_and_misses():
+    """MOTA's terms are reported: one phantom track-frame and one missed object-frame."""
+    from tasking.track_metrics import tracking_metrics
+    truth_ids = [[0], [0]]
+    truth_xy = [[[0.0, 0.0]], [[0.0, 0.0]]]
+    track_ids = [[1, 2], []]
+    track_xy = [[[0.05, 0.0], [3.0, 3.0]], np.zeros((0, 2))]
+    m = tracking_metrics(truth_ids, truth_xy, track_ids, track_xy, 0.5)
+    assert m["false_positives"] == 1 and m["misses"] == 1 and m["matches"] == 1
+    assert m["mota"] == 1 - (m["false_positives"] + m["misses"] + m["switches"]) / 2
