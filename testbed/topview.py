@@ -87,7 +87,17 @@ class TopView:
             cv2.putText(img, str(n), (q[0] + 6, q[1] - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, WALL, 1)
         text = title or f"frame {result.index}  hull {result.hull_area:.2f} m2  residual {result.residual:.2f}"
         cv2.putText(img, text, (8, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, WALL, 1, cv2.LINE_AA)
+        self._legend(img)
         return img
+
+    def _legend(self, img: np.ndarray) -> None:
+        """What the colours mean, along the bottom margin."""
+        y, x = self.height - 9, 8
+        for what, colour in (("person", TRUTH), ("track", TRACK), ("hull", HULL), ("occluded", CONE),
+                             ("tasked camera", CAMERA_ON)):
+            cv2.rectangle(img, (x, y - 7), (x + 9, y + 2), colour, -1)
+            cv2.putText(img, what, (x + 13, y + 2), cv2.FONT_HERSHEY_SIMPLEX, 0.38, WALL, 1, cv2.LINE_AA)
+            x += 13 + cv2.getTextSize(what, cv2.FONT_HERSHEY_SIMPLEX, 0.38, 1)[0][0] + 14
 
 
 def mosaic(rgb: np.ndarray, scanlines: np.ndarray, numbers, width: int, columns: int = 3) -> np.ndarray:
