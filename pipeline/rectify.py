@@ -51,7 +51,7 @@ def virtual_extent(camera: Camera) -> tuple[float, float, float, float]:
     x: the columns covered over the whole height of the raw image (between its left and
     right edges at every row); y: the full vertical extent of the raw image.
     """
-    per_side = 64
+    per_side = 1024                 # 64 missed an extreme mid-edge by 0.1 px under strong distortion
     x, y = level_points(camera, _border_points(camera.width, camera.height, per_side))
     left, right = x[2 * per_side:3 * per_side], x[3 * per_side:]
     if right.min() <= left.max():

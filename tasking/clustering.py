@@ -62,6 +62,9 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     # imported here: scikit-learn's import is ~1 s of every command's start
     from sklearn.cluster import KMeans
 
+    # k-means++ seeds by index: the same axes in another order (the estimates permuted)
+    # could end in another local optimum; sorted (to 1e-12 rad) they are one input
+    axes = np.sort(np.round(np.asarray(axes, dtype=float) % np.pi, 12) % np.pi)
     feats = np.c_[np.cos(2 * axes), np.sin(2 * axes)]
     distinct = np.unique(np.round(feats, 12), axis=0).shape[0]
     c = min(k, distinct)
@@ -123,7 +126,9 @@ def clustering_select(camera_yaw, estimates, k: int, seed: int, camera_xy=None) 
     ----------
     camera_yaw : (N,) float, radians, world frame
     estimates : (p, 2) float, metres, world frame, p >= 2
-    k : number of cameras, 1 <= k <= N
+    k : number of cameras, 1 <= k <= N (with k = 1 the one centre of axes that all come
+        with their perpendiculars is the zero vector: its angle is noise, and
+        :func:`tasking.choose_cameras` tasks uniform's camera instead)
     seed : int, k-means random_state
     camera_xy : (N, 2) float, metres, world frame, or None (ties: lowest index)
 

@@ -421,7 +421,7 @@ def choose_cameras(
     if room_xy is not None:
         return np.array(incremental_select_convex(camera_xy, cones, room, room_xy, current,
                                                   m), dtype=np.intp)
-    if tasker == "clustering" and pair_axes(estimates).size:
+    if tasker == "clustering" and k >= 2 and pair_axes(estimates).size:   # k = 1: no direction (docs)
         seed = 0 if rng is None else int(rng.integers(2**31 - 1))
         return clustering_select(camera_yaw, estimates, k, seed, camera_xy=camera_xy)
     if tasker in ("uniform", "clustering"):

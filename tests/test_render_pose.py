@@ -40,3 +40,111 @@ def test_pose_is_inverse_of_view_and_matches_pyrender(lab):
     ref = pyrender.IntrinsicsCamera(K[0, 0], K[1, 1], K[0, 2] + 0.5, K[1, 2] + 0.5, znear=0.05, zfar=50.0)
     np.testing.assert_allclose(projection_matrix(K, cam.width, cam.height, 0.05, 50.0),
                                ref.get_projection_matrix(cam.width, cam.height), atol=1e-12)
+
+
+# --- hypothesis properties: random cameras -----------------------------------------------
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+
+@st.composite
+def pinhole_cameras(draw):
+    """(K, rvec, R, t, width, height): any focal length, aspect, principal point (even
+    off the image) and pose."""
+    w, h = draw(st.integers(2, 1600)), draw(st.integers(2, 1200))
+    fx = draw(st.floats(0.2, 3.0)) * w
+    fy = fx * draw(st.floats(0.8, 1.25))
+    cx, cy = draw(st.floats(-0.2, 1.2)) * w, draw(st.floats(-0.2, 1.2)) * h
+    K = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+    rvec = np.array(draw(st.tuples(*[st.floats(-3.0, 3.0)] * 3)))
+    t = np.array(draw(st.tuples(*[st.floats(-10.0, 10.0)] * 3)))
+    return K, rvec, cv2.Rodrigues(rvec)[0], t, w, h
+
+
+def _points_in_front(K, R, t, w, h, rng, n=50):
+    """World points whose pixels spread over the image (outer edges included), 0.1..40 m deep."""
+    uv = rng.uniform([-0.5, -0.5], [w - 0.5, h - 0.5], (n, 2))
+    z = rng.uniform(0.1, 40.0, n)
+    points_cam = np.linalg.solve(K, np.column_stack([uv, np.ones(n)]).T).T * z[:, None]
+    return (R.T @ (points_cam - t).T).T, uv, z
+
+
+@settings(max_examples=150, deadline=None)
+@given(pinhole_cameras(), st.integers(0, 2**32 - 1))
+def test_opengl_projection_matches_projectpoints_for_any_camera(camera, seed):
+    K, rvec, R, t, w, h = camera
+    pts, uv, z = _points_in_front(K, R, t, w, h, np.random.default_rng(seed))
+    expected = cv2.projectPoints(pts, rvec, t, K, None)[0].reshape(-1, 2)
+    got = project_opengl(pts, R, t, K, w, h)
+    np.testing.assert_allclose(got, expected, atol=1e-6 * max(w, h))
+    np.testing.assert_allclose(got, uv, atol=1e-6 * max(w, h))
+    # flip_rows draws the image upside down: window y counts rows from the top
+    clip = (projection_matrix(K, w, h, flip_rows=True) @ view_matrix(R, t) @ np.column_stack([pts, np.ones(len(pts))]).T).T
+    assert np.all(clip[:, 3] > 0)                                 # in front of the OpenGL camera
+    ndc = clip[:, :3] / clip[:, 3:]
+    np.testing.assert_allclose((ndc[:, 1] + 1) / 2 * h - 0.5, uv[:, 1], atol=1e-6 * max(w, h))
+    between = (z > 0.05) & (z < 50.0)                              # default near and far planes
+    assert np.all(np.abs(ndc[between, 2]) <= 1 + 1e-9)
+
+
+@settings(max_examples=150, deadline=None)
+@given(pinhole_cameras(), st.floats(0.01, 1.0), st.floats(2.0, 500.0))
+def test_pose_view_and_projection_follow_the_opengl_conventions(camera, znear, zfar):
+    """The pose is camera-to-world with OpenGL axes (x right = R[0], y up = -R[1], z backward =
+    -R[2]) at the camera centre, the view matrix its inverse, and the projection pyrender's
+    IntrinsicsCamera with the principal point moved by half a pixel (docs of render.pose)."""
+    import pyrender
+
+    K, _, R, t, w, h = camera
+    pose, view = opencv_to_opengl_pose(R, t), view_matrix(R, t)
+    np.testing.assert_allclose(pose @ view, np.eye(4), atol=1e-9)
+    np.testing.assert_allclose(pose[:3, :3], np.column_stack([R[0], -R[1], -R[2]]), atol=1e-12)
+    np.testing.assert_allclose(pose[:3, 3], -R.T @ t, atol=1e-9)
+    assert np.linalg.det(pose[:3, :3]) == pytest.approx(1.0)
+    ref = pyrender.IntrinsicsCamera(K[0, 0], K[1, 1], K[0, 2] + 0.5, K[1, 2] + 0.5, znear=znear, zfar=zfar)
+    np.testing.assert_allclose(projection_matrix(K, w, h, znear, zfar), ref.get_projection_matrix(w, h),
+                               rtol=1e-12, atol=1e-12)
+
+
+@st.composite
+def small_lenses(draw):
+    """(K, dist, width, height) of a small image with a lens that does not fold over."""
+    from pipeline.rectify import check_lens
+    from scene import Camera
+
+    w, h = draw(st.integers(8, 96)), draw(st.integers(8, 96))
+    f = w / 2 / np.tan(draw(st.floats(np.radians(20), np.radians(90))) / 2)
+    cx = (w - 1) / 2 + draw(st.floats(-0.1, 0.1)) * w
+    cy = (h - 1) / 2 + draw(st.floats(-0.1, 0.1)) * h
+    K = np.array([[f, 0, cx], [0, f * draw(st.floats(0.9, 1.1)), cy], [0, 0, 1.0]])
+    dist = np.array([draw(st.floats(-0.3, 0.3)), draw(st.floats(-0.1, 0.1)), draw(st.floats(-0.005, 0.005)),
+                     draw(st.floats(-0.005, 0.005)), draw(st.floats(-0.05, 0.05))])
+    try:
+        check_lens(Camera(1, K, dist, np.eye(3), np.zeros(3), w, h))
+    except ValueError:
+        from hypothesis import reject
+        reject()
+    return K, dist, w, h
+
+
+@settings(max_examples=100, deadline=None)
+@given(small_lenses())
+def test_distortion_map_sends_every_pixel_to_the_canvas_pixel_of_its_ray(lens):
+    """Each output pixel reads, on the ideal canvas, the ray that cv2.projectPoints(K, dist)
+    sends back to that very pixel; and it reads inside the canvas (no smeared border)."""
+    from pipeline.rectify import ROUND_TRIP
+    from render.distortion import distortion_maps
+
+    K, dist, w, h = lens
+    maps = distortion_maps(K, dist, w, h)
+    cw, ch = maps.canvas_size
+    xy = maps.map_xy.reshape(-1, 2).astype(float)
+    assert np.all(xy >= 0) and np.all(xy <= [cw - 1, ch - 1])
+    rays = np.linalg.solve(maps.canvas_K(K), np.column_stack([xy, np.ones(len(xy))]).T).T
+    back = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), K, dist)[0].reshape(-1, 2)
+    v, u = np.mgrid[0:h, 0:w]
+    # within ROUND_TRIP pixels, what check_lens lets a lens's undistortion miss by:
+    # cv2.undistortPoints's fixed-point iterations stop short in the corners of strong
+    # lenses (0.09 px at a 42-pixel-wide image's corner)
+    np.testing.assert_allclose(back, np.column_stack([u.ravel(), v.ravel()]), atol=ROUND_TRIP)

@@ -7,6 +7,8 @@ import cv2
 import numpy as np
 import pytest
 import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from scene import Camera, Scene, load_scene, rotation_from_yaw_pitch, scene_path
 
@@ -67,6 +69,33 @@ def test_calibration_projects_like_opencv():
 def test_rotation_is_orthonormal():
     R = rotation_from_yaw_pitch(0.7, 0.3)
     assert np.allclose(R @ R.T, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-4 * np.pi, 4 * np.pi), st.floats(-np.radians(89.9), np.radians(89.9)),
+       st.tuples(*[st.floats(-10.0, 10.0)] * 3))
+def test_rotation_from_yaw_pitch_round_trips_through_a_camera(yaw, pitch, position):
+    """R is a rotation (orthonormal, det +1) whose rows are right, down and forward: forward
+    has the stated yaw and pitch, right is level, down points below the horizon; a camera
+    built from it gives back yaw, pitch and centre, and they rebuild the same R."""
+    R = rotation_from_yaw_pitch(yaw, pitch)
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(R) == pytest.approx(1.0, abs=1e-12)
+    forward = np.array([np.cos(pitch) * np.cos(yaw), np.cos(pitch) * np.sin(yaw), -np.sin(pitch)])
+    np.testing.assert_allclose(R[2], forward, atol=1e-12)
+    assert abs(R[0, 2]) < 1e-12 and R[1, 2] < 0                     # no roll; down is down
+    cam = Camera.from_pose(1, position, yaw, pitch, 64, 48, 1.0, np.zeros(5))
+    assert abs(np.angle(np.exp(1j * (cam.yaw - yaw)))) < 1e-9
+    assert cam.pitch == pytest.approx(pitch, abs=1e-9)
+    np.testing.assert_allclose(cam.center_world, position, atol=1e-9)
+    np.testing.assert_allclose(rotation_from_yaw_pitch(cam.yaw, cam.pitch), R, atol=1e-9)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(2, 4000), st.integers(2, 4000), st.floats(0.01, np.radians(179.0)))
+def test_hfov_of_a_camera_is_the_hfov_it_was_built_with(width, height, hfov):
+    cam = Camera.from_pose(1, [0.0, 0.0, 1.0], 0.0, 0.0, width, height, hfov, np.zeros(5))
+    assert cam.hfov == pytest.approx(hfov, rel=1e-12)
 
 
 def test_frozen_and_read_only():

@@ -4,6 +4,7 @@ from itertools import combinations
 
 import numpy as np
 import pytest
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import box
@@ -136,6 +137,106 @@ def test_clustering_is_seeded_and_distinct():
     a = choose_cameras("clustering", 6, xy, yaw, np.pi, c, R, ROOM, rng=np.random.default_rng(1))
     b = choose_cameras("clustering", 6, xy, yaw, np.pi, c, R, ROOM, rng=np.random.default_rng(1))
     assert a.tolist() == b.tolist() and np.unique(a).size == 6
+
+
+estimate_sets = st.lists(st.tuples(st.integers(-40, 40), st.integers(-40, 40)), min_size=2, max_size=7,
+                         unique=True).map(lambda p: np.array(p, float) / 40)     # 2.5 cm grid: no near-duplicates
+
+
+def _turn(points, alpha, centre):
+    c, s = np.cos(alpha), np.sin(alpha)
+    return (np.asarray(points) - centre) @ np.array([[c, s], [-s, c]]) + centre
+
+
+@settings(max_examples=100, deadline=None)
+@given(estimate_sets, st.floats(-np.pi, np.pi), st.randoms(use_true_random=False))
+def test_pair_axes_turn_with_the_estimates_and_ignore_their_order(est, alpha, rnd):
+    axes = np.sort(pair_axes(est))
+    order = list(range(len(est)))
+    rnd.shuffle(order)
+    np.testing.assert_allclose(np.sort(pair_axes(est[order])), axes, atol=1e-12)
+    turned = np.sort(pair_axes(_turn(est, alpha, np.array([0.3, -0.2]))))
+    assert np.all(axial_distance(np.sort((axes + alpha) % np.pi)[None], turned[:, None]).min(axis=1) < 1e-9)
+    assert axes.size == len(est) * (len(est) - 1)
+
+
+@settings(max_examples=150, deadline=None)
+@given(estimate_sets, st.integers(2, 5), st.randoms(use_true_random=False))
+def test_cluster_axes_do_not_depend_on_the_order_of_the_estimates(est, k, rnd):
+    """The estimates' order (track ids, detection order) must not choose the clusters; k-means++
+    seeds by index, so unsorted axes ended in other local optima (other cameras). (k = 1 has
+    no direction at all: test_clustering_of_one_camera_is_uniform.)"""
+    centres, sizes = cluster_axes(pair_axes(est), k, seed=0)
+    order = list(range(len(est)))
+    rnd.shuffle(order)
+    c2, s2 = cluster_axes(pair_axes(est[order]), k, seed=0)
+    np.testing.assert_array_equal(s2, sizes)
+    assert np.all(axial_distance(c2, centres) < 1e-9)
+
+
+@settings(max_examples=60, deadline=None)
+@given(estimate_sets.filter(lambda e: len(e) <= 4), st.integers(0, 15), st.booleans())
+def test_clustering_turns_with_the_room_when_every_axis_is_a_cluster(est, turns, reverse):
+    """Estimates and a ring of cameras turned together about the room centre by a multiple of
+    the ring's spacing: with k the number of distinct pair axes (each its own cluster, no
+    k-means optimum to miss, no second round) and each nearest its own camera axis, the
+    chosen viewing axes turn with them."""
+    from tasking.clustering import clustering_select
+
+    xy, yaw = ring_cameras(16)
+    axes = pair_axes(est)
+    feats = np.unique(np.round(np.c_[np.cos(2 * axes), np.sin(2 * axes)], 9), axis=0)
+    k = feats.shape[0]
+    ring = np.arange(8) * np.pi / 8                                 # the ring's 8 viewing axes
+    d = axial_distance(np.arctan2(feats[:, 1], feats[:, 0])[:, None] / 2, ring[None])
+    nearest = np.sort(d, axis=1)
+    if k > 8 or np.unique(d.argmin(axis=1)).size < k or np.any(nearest[:, 1] - nearest[:, 0] < 1e-6):
+        return          # centres contend for one camera axis: the order they pick in decides (by angle)
+    alpha = 2 * np.pi * turns / 16
+    est2 = _turn(est, alpha, np.zeros(2))
+    got = clustering_select(yaw, est, k, seed=0, camera_xy=xy)
+    got2 = clustering_select(yaw, est2[::-1] if reverse else est2, k, seed=0, camera_xy=xy)
+    axis = lambda a: np.sort(np.round(np.asarray(a) % np.pi, 9) % np.round(np.pi, 9))
+    np.testing.assert_allclose(axis(yaw[got2]), axis(yaw[got] + alpha), atol=1e-8)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_clustering_of_one_camera_is_uniform(seed):
+    """k = 1: every pair axis comes with its perpendicular, so the doubled-angle points sum
+    to zero and a single k-means centre's angle was rounding noise (reversing the estimates
+    changed the camera); one camera has no cluster direction, so it is uniform's."""
+    rng = np.random.default_rng(seed)
+    est = rng.uniform(-0.8, 0.8, (3, 2))
+    xy, yaw = ring_cameras(16)
+    got = [choose_cameras("clustering", 1, xy, yaw, np.pi, e, R, ROOM).tolist() for e in (est, est[::-1])]
+    assert got == [choose_cameras("uniform", 1, xy, yaw, np.pi, est, R, ROOM).tolist()] * 2
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(2, 8), st.integers(0, 5), st.floats(0.3, 2 * np.pi - 0.3),
+       st.booleans())
+def test_subset_areas_are_the_shapely_hull_and_shrink_as_cameras_are_added(seed, n, m, fov, inside):
+    rng = np.random.default_rng(seed)
+    room = circle_room(quad_segs=16)
+    c = random_discs(rng, m)
+    xy, yaw = ring_cameras(n, phase=rng.uniform(0, 2 * np.pi))
+    if inside:                                          # cameras anywhere inside, clear of the discs
+        pts = []
+        while len(pts) < n:
+            p = rng.uniform(-1, 1, 2)
+            if np.hypot(*p) < 1 and (m == 0 or np.all(np.hypot(*(c - p).T) > R + 0.01)):
+                pts.append(p)
+        xy = np.array(pts)
+    yaw = yaw + rng.normal(0, 0.3, n)
+    w = free_wedges_from_discs(xy, yaw, fov, c, R, room)
+    cov = coverage_cells(w, room)
+    assert cov.areas.sum() == pytest.approx(room.area, abs=1e-9)
+    order = rng.permutation(n)
+    chain = [order[:j] for j in range(1, n + 1)]                  # one camera added at a time
+    table = np.array([subset_areas(cov, s[None])[0] for s in chain])
+    direct = [shapely.difference(room, shapely.union_all(w[s])).area for s in chain]
+    np.testing.assert_allclose(table, direct, rtol=1e-9, atol=1e-9)
+    assert np.all(np.diff(np.r_[room.area, table]) <= 1e-12)
 
 
 def _wall_rig():
