@@ -8,6 +8,7 @@ frames give the same bytes (no muxer dates or version strings).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import tempfile
@@ -67,9 +68,9 @@ class VideoWriter:
                                       start_new_session=True)      # Ctrl-C reaches this process only
         self.frames = 0
 
-    def _failed(self, what: str) -> OSError:
-        self._proc.kill()
-        code = self._proc.wait()
+    def _failed(self, proc: subprocess.Popen, what: str) -> OSError:
+        proc.kill()
+        code = proc.wait()
         status = f"killed by signal {-code}" if code < 0 else f"exit status {code}"
         return OSError(f"cannot write {self.path}: ffmpeg {what} ({status}: {_last_line(self._log)})")
 
@@ -80,7 +81,7 @@ class VideoWriter:
         try:
             self._proc.stdin.write(memoryview(rgb).cast("B"))
         except OSError:
-            raise self._failed(f"stopped at frame {self.frames}") from None
+            raise self._failed(self._proc, f"stopped at frame {self.frames}") from None
         self.frames += 1
 
     def close(self) -> None:
@@ -88,23 +89,19 @@ class VideoWriter:
             return
         proc, self._proc = self._proc, None
         try:
-            try:
+            with contextlib.suppress(OSError):          # ffmpeg gone: its status says why
                 proc.stdin.close()
-            except OSError:
-                pass
             code = proc.wait()
         except BaseException:
             proc.kill()
             proc.wait()
+            self._log.close()
             raise
-        if code != 0 or self.frames == 0:
-            self._proc = proc
-            try:
-                raise self._failed(f"failed after {self.frames} frames")
-            finally:
-                self._proc = None
-                self._log.close()
-        self._log.close()
+        try:
+            if code != 0 or self.frames == 0:
+                raise self._failed(proc, f"failed after {self.frames} frames")
+        finally:
+            self._log.close()
 
 
 def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[np.ndarray]:
