@@ -24,7 +24,7 @@ from typing import Any
 import yaml
 
 from scene import yamlio
-from scene.checks import check_input_file, check_mapping, check_positive
+from scene.checks import check_mapping, check_positive, read_input_text
 
 from .files import write_atomic
 
@@ -105,11 +105,9 @@ class PipelineParams:
     @classmethod
     def from_yaml(cls, path: str | os.PathLike) -> PipelineParams:
         """Parameters from a YAML file (a mapping at top level, or under a ``pipeline`` key)."""
-        path = check_input_file("params", path)
+        text = read_input_text("params", path)
         try:
-            data = yamlio.load(path.read_text(encoding="utf-8"))
-        except UnicodeDecodeError:
-            raise ValueError(f"params: {path} is not UTF-8 text") from None
+            data = yamlio.load(text)
         except yaml.YAMLError as exc:
             raise ValueError(f"params: {path} is not valid YAML ({yamlio.error_text(exc)})") from None
         if isinstance(data, Mapping) and set(data) == {"pipeline"}:

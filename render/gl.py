@@ -89,12 +89,13 @@ def _egl_device_count(path: str) -> int:
 
 def probe(backend: str) -> str | None:
     """None when ``backend``'s libraries load, else the name of the missing library."""
+    paths = []
     for names in LIBRARIES[backend]:
-        path = _load_library(names)
-        if path is None:
+        paths.append(_load_library(names))
+        if paths[-1] is None:
             return names[0]
-        if backend == "egl" and names is LIBRARIES["egl"][0] and _egl_device_count(path) == 0:
-            return f"{names[0]} with an EGL device (it loads, but no vendor library offers one: libegl-mesa0 missing?)"
+    if backend == "egl" and _egl_device_count(paths[0]) == 0:
+        return "libEGL.so.1 with an EGL device (it loads, but no vendor library offers one: libegl-mesa0 missing?)"
     return None
 
 

@@ -42,6 +42,17 @@ def check_input_file(name: str, path: str | os.PathLike) -> Path:
     raise FileNotFoundError(f"{name}: no such file {str(path)!r}")
 
 
+def read_input_text(name: str, path: str | os.PathLike) -> str:
+    """The UTF-8 text of the file at ``path`` (:func:`check_input_file`); a one-line
+    ValueError naming the file and the first byte that is not UTF-8."""
+    path = check_input_file(name, path)
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{name}: {str(path)!r} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
+                         f"offset {exc.start})") from None
+
+
 def _number(name: str, value: Any) -> float:
     """``value`` as a float; booleans and strings are not numbers here."""
     if isinstance(value, (bool, str, bytes)):

@@ -22,10 +22,10 @@ from .checks import (
     check_array,
     check_choice,
     check_finite,
-    check_input_file,
     check_int,
     check_mapping,
     check_positive,
+    read_input_text,
     readonly,
 )
 from .room import Room
@@ -146,13 +146,8 @@ def scene_file(name_or_path: str | Path) -> Path:
 
 
 def read_scene_text(path: str | Path) -> str:
-    """The text of a scene file; a one-line error when it is missing or not a file (:func:`check_input_file`)."""
-    path = check_input_file("scene file", path)
-    try:
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"scene file: {str(path)!r} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
-                         f"offset {exc.start})") from None
+    """The text of a scene file; a one-line error when it is missing or not a file (:func:`scene.checks.read_input_text`)."""
+    return read_input_text("scene file", path)
 
 
 def scene_path(name: str) -> Path:

@@ -226,21 +226,28 @@ def check_out(out: Path, resume: bool = False, overwrite: bool = False) -> Path:
     if others and not (resume or overwrite):
         raise FileExistsError(f"--out: {out} exists and is not empty; pass --resume to finish it "
                               "or --overwrite to replace it")
-    refuse_foreign(out, others, MANIFEST, "a camtask render dataset", "--resume" if resume else "--overwrite")
-    if overwrite and others:            # the name alone proves nothing (web extensions, PWAs have one)
-        try:
-            read_manifest(out)
-        except ValueError as exc:
-            raise FileExistsError(f"--overwrite: {out} is not a camtask render dataset ({exc}; it holds "
-                                  f"{names(others)}); empty it yourself or choose another folder") from None
+    # --overwrite deletes: the manifest must be ours, not any manifest.json (web extensions
+    # have one); --resume reads it next and names what is wrong with it
+    read = (lambda path: read_manifest(path.parent)) if overwrite else None
+    refuse_foreign(out, others, MANIFEST, "a camtask render dataset", "--resume" if resume else "--overwrite", read)
     return out
 
 
-def refuse_foreign(folder: Path | str, others: list[str], marker: str, what: str, flag: str) -> None:
+def refuse_foreign(folder: Path | str, others: list[str], marker: str, what: str, flag: str,
+                   read: Callable[[Path], object] | None = None) -> None:
     """Refuse ``flag`` (which empties or adds to ``folder``) when ``folder`` holds ``others``
-    but not ``marker``: it is not ``what``, so its files are none of ours to delete."""
-    if others and marker not in others:
-        raise FileExistsError(f"{flag}: {folder} is not {what} (no {marker}; it holds {names(others)}); "
+    but not ``marker``, or a ``marker`` that ``read`` (given its path) refuses with a
+    ValueError: it is not ``what``, so its files are none of ours to delete."""
+    if not others:
+        return
+    why = f"no {marker}" if marker not in others else None
+    if why is None and read is not None:
+        try:
+            read(Path(folder) / marker)
+        except ValueError as exc:
+            why = str(exc)
+    if why is not None:
+        raise FileExistsError(f"{flag}: {folder} is not {what} ({why}; it holds {names(others)}); "
                               "empty it yourself or choose another folder")
 
 

@@ -28,6 +28,14 @@ BITEXACT = ["-threads", "1", "-slices", "4", "-level", "3", "-fflags", "+bitexac
 MAX_FPS = 1000.0
 
 
+def check_frame_rate(name: str, fps: float) -> float:
+    """``fps`` (Hz) if a Matroska video can hold it, else a one-line ValueError naming ``name``."""
+    if not 0 < float(fps) <= MAX_FPS:
+        raise ValueError(f"{name}: Matroska stores milliseconds, so at most {MAX_FPS:g} frames per second; "
+                         f"got a frame rate of {fps:g} Hz (use --format png)")
+    return float(fps)
+
+
 def _ffmpeg() -> str:
     import imageio_ffmpeg
 
@@ -56,9 +64,7 @@ class VideoWriter:
 
         self.path = Path(path)
         self.shape = (int(height), int(width), 3)
-        if not 0 < float(fps) <= MAX_FPS:
-            raise ValueError(f"video: Matroska stores milliseconds; expected a frame rate in (0, {MAX_FPS:g}] Hz, got {fps}")
-        rate = str(Fraction(float(fps)).limit_denominator())
+        rate = str(Fraction(check_frame_rate("video", fps)).limit_denominator())
         # the command imageio_ffmpeg.write_frames ran (same bytes), with ffmpeg's exit status checked
         cmd = [_ffmpeg(), "-y", "-f", "rawvideo", "-vcodec", "rawvideo", "-s", f"{int(width)}x{int(height)}",
                "-pix_fmt", "rgb24", "-r", rate, "-i", "-", "-an", "-vcodec", "ffv1", "-pix_fmt", "bgr0",

@@ -97,7 +97,7 @@ def check_export_out(out: str, overwrite: bool) -> None:
     removes it), inside an episode of a dataset, under a file or in a folder that cannot be
     written, or a non-empty folder unless ``overwrite`` and it is an earlier export (it holds
     grid.json): anything else in it is none of ours to delete."""
-    from testbed.generate import names, refuse_foreign
+    from testbed.generate import refuse_foreign
     from testbed.output import check_outside_episodes, check_writable
 
     o = Path(out)
@@ -116,19 +116,19 @@ def check_export_out(out: str, overwrite: bool) -> None:
     if others and not overwrite:
         raise FileExistsError(f"OUT: {out} exists and is not empty; choose another directory "
                               "or pass --overwrite to replace an earlier export")
-    refuse_foreign(out, others, "grid.json", "an export of camtask", "--overwrite")
-    if others and not is_export(o / "grid.json"):     # the name alone proves nothing
-        raise FileExistsError(f"--overwrite: {out} is not an export of camtask (its grid.json is not one; it "
-                              f"holds {names(others)}); empty it yourself or choose another folder")
+    refuse_foreign(out, others, "grid.json", "an export of camtask", "--overwrite", read_grid)
 
 
-def is_export(grid: Path) -> bool:
-    """Whether ``grid`` is the grid.json of a camtask export (a JSON object with its keys)."""
+def read_grid(path: Path) -> dict:
+    """An export's grid.json; a ValueError unless it is one (the name alone proves nothing)."""
     try:
-        doc = json.loads(grid.read_text(encoding="utf-8"))
+        doc = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
-        return False
-    return isinstance(doc, dict) and doc.get("layout") in LAYOUTS and {"cell_m", "position_id", "views"} <= doc.keys()
+        doc = None
+    if not (isinstance(doc, dict) and doc.get("layout") in LAYOUTS
+            and {"cell_m", "position_id", "views"} <= doc.keys()):
+        raise ValueError("its grid.json is not one")
+    return doc
 
 
 def check_intact(episode: Path) -> None:

@@ -88,10 +88,8 @@ def build_config(args: argparse.Namespace):
     check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])
     silhouette_dtype(scene.people.count, "--people" if args.people is not None else "people.count")
     if args.format == "video":
-        from testbed.lossless import MAX_FPS
-        if scene.frame_rate > MAX_FPS:
-            raise ValueError(f"--format video: Matroska stores milliseconds, so at most {MAX_FPS:g} frames per "
-                             f"second; the scene's frame_rate is {scene.frame_rate:g} (use --format png)")
+        from testbed.lossless import check_frame_rate
+        check_frame_rate("--format video: the scene's frame_rate", scene.frame_rate)
     return config, scene
 
 
