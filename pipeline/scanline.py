@@ -19,11 +19,6 @@ from __future__ import annotations
 import numpy as np
 
 
-def column_sums(rectified) -> np.ndarray:
-    """Foreground pixels per column: (n_cams, H, W) bool/uint8 -> (n_cams, W) float64."""
-    return np.asarray(rectified).sum(axis=1, dtype=np.int64).astype(np.float64)
-
-
 def _box_sum(x: np.ndarray, k: int) -> np.ndarray:
     """Edge-padded sliding sum of width ``k`` (odd) along the last axis, exact for integers."""
     pad = k // 2

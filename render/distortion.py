@@ -36,20 +36,17 @@ class DistortionMaps:
         canvas: ``K_canvas = K`` with ``cx + du``, ``cy + dv``
     map_xy : (H, W, 2) float32, canvas pixel (u, v) for each output pixel (row, col); the
         bilinear map (OpenCV rounds it to 1/32 px internally; measured ~30 % faster than
-        passing ``fixed``, with 16 x 640 x 480 RGBA on this machine)
-    fixed : the same map converted by ``cv2.convertMaps`` to CV_16SC2 + CV_16UC1 (kept
-        for callers; not used by the renderer)
+        its ``cv2.convertMaps`` fixed-point form, with 16 x 640 x 480 RGBA on this machine)
     nearest : the map rounded to whole pixels (CV_16SC2), for label images
     identity : True when there is no distortion (remapping is skipped)
     block_lo, block_hi : (ceil(H / BLOCK), ceil(W / BLOCK), 2) float32, the smallest and
         largest canvas (u, v) of each BLOCK x BLOCK tile of output pixels (for
-        :func:`affected_regions`)
+        :func:`regions_of`)
     """
 
     canvas_size: tuple[int, int]
     offset: tuple[int, int]
     map_xy: np.ndarray
-    fixed: tuple
     nearest: np.ndarray | None
     identity: bool
     block_lo: np.ndarray = None
@@ -92,7 +89,7 @@ def distortion_maps(K, dist, width: int, height: int, margin: int = 2) -> Distor
     if not np.any(dist):
         v, u = np.mgrid[0:height, 0:width].astype(np.float32)
         xy = np.stack([u, v], axis=-1)
-        return DistortionMaps((width, height), (0, 0), xy, (None, None), None, True, *_block_bounds(xy))
+        return DistortionMaps((width, height), (0, 0), xy, None, True, *_block_bounds(xy))
     ideal = ideal_pixels(K, dist, width, height)
     lo = np.floor(ideal.reshape(-1, 2).min(axis=0)) - margin
     hi = np.ceil(ideal.reshape(-1, 2).max(axis=0)) + margin
@@ -100,31 +97,22 @@ def distortion_maps(K, dist, width: int, height: int, margin: int = 2) -> Distor
     dv = int(max(0, -lo[1]))
     canvas = (int(max(width, hi[0] + 1)) + du, int(max(height, hi[1] + 1)) + dv)
     xy = (ideal + np.array([du, dv])).astype(np.float32)
-    fixed = cv2.convertMaps(xy[..., 0], xy[..., 1], cv2.CV_16SC2)
     nearest = cv2.convertMaps(xy[..., 0], xy[..., 1], cv2.CV_16SC2, nninterpolation=True)[0]
-    return DistortionMaps(canvas, (du, dv), xy, fixed, nearest, False, *_block_bounds(xy))
-
-
-def affected_regions(maps: DistortionMaps, rects: np.ndarray) -> list[tuple[int, int, int, int]]:
-    """Output regions that can change when the canvas changes inside ``rects``.
-
-    rects : (k, 4) float, canvas pixel bounds (x0, y0, x1, y1), inclusive; +-inf for
-        "beyond the canvas edge"
-    Returns one ``(r0, r1, c0, c1)`` output slice per rect that touches the image (none
-    for the others): every output pixel whose bilinear (or nearest) source pixels meet
-    the rect lies inside. Conservative: whole BLOCK x BLOCK tiles.
-    """
-    rects = np.asarray(rects, float).reshape(1, -1, 4)
-    return regions_of(maps.block_lo[None], maps.block_hi[None], rects, maps.map_xy.shape[:2])[0]
+    return DistortionMaps(canvas, (du, dv), xy, nearest, False, *_block_bounds(xy))
 
 
 def regions_of(block_lo: np.ndarray, block_hi: np.ndarray, rects: np.ndarray,
                size: tuple[int, int]) -> list[list[tuple[int, int, int, int]]]:
-    """:func:`affected_regions` for n cameras at once.
+    """Output regions that can change when each camera's canvas changes inside its ``rects``.
 
     block_lo, block_hi : (n, nby, nbx, 2) each camera's map bounds per tile
-    rects : (n, k, 4) canvas boxes per camera (NaN rows: none)
+        (:attr:`DistortionMaps.block_lo`, ``block_hi``)
+    rects : (n, k, 4) float, canvas pixel bounds (x0, y0, x1, y1) per camera, inclusive;
+        +-inf for "beyond the canvas edge", NaN rows: none
     size : (H, W) of the output images
+    Returns per camera one ``(r0, r1, c0, c1)`` output slice per rect that touches the
+    image (none for the others): every output pixel whose bilinear (or nearest) source
+    pixels meet the rect lies inside. Conservative: whole BLOCK x BLOCK tiles.
     """
     H, W = size
     if not rects.shape[1]:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from scene.room import Room
+from scene.room import FOOT, Room
 
 
 @dataclass(frozen=True)
@@ -91,7 +91,7 @@ WALL_COLOURS = ((196, 190, 172), (178, 186, 192), (200, 194, 184), (184, 192, 17
 BASEBOARD = (0.10, (92, 84, 76))  # height (m), colour
 
 
-def room_mesh(room: Room, lighting: Lighting = Lighting(), tile: float = 0.3048,
+def room_mesh(room: Room, lighting: Lighting = Lighting(), tile: float = FOOT,
               cell: float = 1.0) -> Mesh:
     """Floor (tiles with a subtle checker and per-tile variation), walls, ceiling.
 

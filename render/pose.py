@@ -2,8 +2,9 @@
 
 OpenCV cameras: x right, y down, z forward; ``X_cam = R @ X_world + t``; pixel centres
 at integer (u, v). OpenGL / pyrender cameras: x right, y up, z backward; pixel centres
-at half-integer window coordinates. :func:`opencv_to_opengl_pose` is the one place the
-axis flip happens; :func:`projection_matrix` equals pyrender's ``IntrinsicsCamera``
+at half-integer window coordinates. :data:`CV_TO_GL` is the one axis flip, applied by
+:func:`opencv_to_opengl_pose` and by its inverse :func:`view_matrix` (what the renderer
+uses); :func:`projection_matrix` equals pyrender's ``IntrinsicsCamera``
 projection with the principal point moved by half a pixel, so that a world point lands
 on the pixel ``cv2.projectPoints`` (without distortion) gives it.
 

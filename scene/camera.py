@@ -91,14 +91,6 @@ class Camera:
         """Camera centre, (3,) float, metres, world frame."""
         return readonly(-self.R.T @ self.t)
 
-    @cached_property
-    def cam2world(self) -> np.ndarray:
-        """(4, 4) float homogeneous camera-to-world transform (OpenCV camera axes)."""
-        T = np.eye(4)
-        T[:3, :3] = self.R.T
-        T[:3, 3] = self.center_world
-        return readonly(T)
-
     @property
     def xy(self) -> np.ndarray:
         """Floor-plane position, (2,) float, metres."""

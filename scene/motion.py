@@ -25,13 +25,13 @@ True
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-__all__ = ["Trajectory", "circle_polygon", "random_drop", "random_waypoint"]
+from .checks import check_positive
+
+__all__ = ["circle_polygon", "random_drop", "random_waypoint"]
 
 #: Tolerance (metres) on the no-overlap and inside-room constraints.
 _EPS = 1e-9
@@ -43,64 +43,16 @@ def circle_polygon(radius: float = 1.0, n_vertices: int = 720, center=(0.0, 0.0)
     >>> round(circle_polygon(1.0, 4).area, 6)
     2.0
     """
-    r = _check_positive("radius", radius)
+    r = check_positive("radius", radius)
     a = np.linspace(0.0, 2.0 * np.pi, int(n_vertices), endpoint=False)
     return Polygon(np.column_stack([center[0] + r * np.cos(a), center[1] + r * np.sin(a)]))
 
 
-@dataclass(frozen=True, eq=False)
-class Trajectory:
-    """Positions of ``m`` discs over ``T`` time steps.
-
-    positions : (T, m, 2) float, metres, world frame (read-only)
-    radii : (m,) float, metres (read-only)
-    dt : float, seconds between steps
-    """
-
-    positions: np.ndarray
-    radii: np.ndarray
-    dt: float
-
-    def __post_init__(self):
-        pos = np.array(self.positions, dtype=float)
-        if pos.ndim != 3 or pos.shape[2] != 2:
-            raise ValueError(f"positions: expected shape (T, m, 2), got {pos.shape}")
-        if not np.all(np.isfinite(pos)):
-            raise ValueError("positions: expected finite numbers")
-        radii = _check_radii(self.radii, pos.shape[1])
-        dt = _check_positive("dt", self.dt)
-        pos.setflags(write=False)
-        radii.setflags(write=False)
-        object.__setattr__(self, "positions", pos)
-        object.__setattr__(self, "radii", radii)
-        object.__setattr__(self, "dt", dt)
-
-    @property
-    def n_steps(self) -> int:
-        return self.positions.shape[0]
-
-    @property
-    def times(self) -> np.ndarray:
-        """(T,) float, seconds from the first step."""
-        return np.arange(self.n_steps) * self.dt
-
-
 # ----------------------------------------------------------------------------- checks
-def _check_positive(name, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected a number, got {value!r}") from None
-    if not np.isfinite(x) or x <= 0:
-        raise ValueError(f"{name}: expected a finite number > 0, got {value!r}")
-    return x
-
-
-def _check_radii(radii, m: int | None = None) -> np.ndarray:
+def _check_radii(radii) -> np.ndarray:
     r = np.array(radii, dtype=float, ndmin=1)
-    if r.ndim != 1 or (m is not None and r.shape[0] != m):
-        want = "(m,)" if m is None else f"({m},)"
-        raise ValueError(f"radii: expected shape {want}, got {r.shape}")
+    if r.ndim != 1:
+        raise ValueError(f"radii: expected shape (m,), got {r.shape}")
     if not np.all(np.isfinite(r)) or np.any(r <= 0):
         raise ValueError("radii: expected finite numbers > 0")
     return r
@@ -232,7 +184,7 @@ def random_waypoint(
     n_steps = int(n_steps)
     if n_steps < 1:
         raise ValueError(f"n_steps: expected an integer >= 1, got {n_steps}")
-    dt = _check_positive("dt", dt)
+    dt = check_positive("dt", dt)
     speeds = np.broadcast_to(np.asarray(speed, dtype=float), (m,)).copy()
     if not np.all(np.isfinite(speeds)) or np.any(speeds < 0):
         raise ValueError("speed: expected finite numbers >= 0")

@@ -13,16 +13,6 @@ from .checks import check_array, check_positive, readonly
 FOOT = 0.3048
 """One foot in metres."""
 
-
-def ft(feet: float) -> float:
-    """Feet to metres.
-
-    >>> round(ft(22), 4)
-    6.7056
-    """
-    return feet * FOOT
-
-
 @dataclass(frozen=True, eq=False)
 class Room:
     """A room with a polygonal floor.

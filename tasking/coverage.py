@@ -118,6 +118,7 @@ def optimal_subset(cov: Coverage, k: int, tol: float = 0.0) -> list:
     # cells covered by >= n - k + 1 cameras are covered by every k-subset
     keep = cov.masks.sum(axis=1) < n - k + 1
     masks, areas = cov.masks[keep], cov.areas[keep]
+    kept = Coverage(masks, areas)
     combos = itertools.combinations(range(n), k)
     best_area, best = np.inf, None
     if n <= 63:
@@ -132,7 +133,7 @@ def optimal_subset(cov: Coverage, k: int, tol: float = 0.0) -> list:
             uncovered = (sub_bits[:, None] & bits[None, :]) == 0  # (C, U)
             scores = uncovered @ areas
         else:
-            scores = areas @ ~masks[:, block].any(axis=2)
+            scores = subset_areas(kept, block)
         i = int(np.flatnonzero(scores <= scores.min() + tol)[0])
         if scores[i] < best_area - tol:
             best_area, best = float(scores[i]), block[i].tolist()

@@ -391,7 +391,8 @@ def choose_cameras(
         modelled as discs of ``radius`` that may overlap
     radius : float or (p,) float, metres
     room : shapely Polygon
-    current : (k,) int, 0-based indices tasked now (incremental; None -> greedy)
+    current : (k,) int, 0-based indices tasked now (incremental; None -> lazy greedy, the
+        same choice as greedy)
     m : cameras swapped per incremental update, 1 <= m <= k
     uniform_sets : mapping k -> k 0-based indices for the uniform tasker (e.g. the lab's
         paper lists); without an entry, ``uniform_select(N, k)``

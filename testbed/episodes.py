@@ -37,6 +37,7 @@ import numpy as np
 
 from pipeline.files import temp_folder
 from pipeline.rectify import nonzero_boxes
+from scene.checks import check_choice
 from testbed.checksum import ALGORITHM, file_digest
 from testbed.dataset import frame_name, write_calibration
 from testbed.png import write_png
@@ -96,6 +97,7 @@ class EpisodeConfig:
     scene_yaml: str = field(default="", repr=False)
 
     def __post_init__(self):
+        check_choice("fmt", self.fmt, FORMATS)
         if self.cameras is not None:
             object.__setattr__(self, "cameras", tuple(sorted(self.cameras)))
 

@@ -597,7 +597,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                         finished(entry, host, secs)
                         del pending[index]
                         show(index, entry["frames"])
-                    for index, frames in (frames_in_progress(out, config) if progress else {}).items():
+                    for index, frames in (frames_in_progress(out) if progress else {}).items():
                         if index in shown:
                             show(index, min(frames, config.frames - 1))
                     if pending:                     # wake at the next finished episode, or in 0.25 s
@@ -639,7 +639,7 @@ def earlier_runs(out: Path) -> list[dict]:
     return [*(before if isinstance(before, list) else []), last]
 
 
-def frames_in_progress(out: Path, config: EpisodeConfig) -> dict[int, int]:
+def frames_in_progress(out: Path) -> dict[int, int]:
     """Frames written so far by the episodes being rendered: mask files of their first
     camera in their temporary folders (``DIR/.episode_NNNN.*.tmp``), by episode index."""
     counts: dict[int, int] = {}

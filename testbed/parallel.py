@@ -204,13 +204,7 @@ def run_tasks(
                unit="trial" if weights is not None else "task", dynamic_ncols=True,
                bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} [{elapsed}<{remaining}]")
     try:
-        if client is None and scheduler is None and workers == 0:
-            out = []
-            for args, wi in zip(tasks, w):
-                out.append(func(*args))
-                bar.update(wi)
-            return out
-        if client is None:
+        if client is None:      # workers=0 and no scheduler: open_client gives None, run here
             with open_client(workers, scheduler) as own:
                 return _run_on(own, func, tasks, w, bar)
         return _run_on(client, func, tasks, w, bar)

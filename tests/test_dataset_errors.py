@@ -463,3 +463,12 @@ def test_verify_names_links_to_nowhere_loops_and_fifos_without_reading_them(tmp_
     os.mkfifo(ep / "fifo")                        # reading it would wait forever
     assert episode_problems(tmp_path, entry) == {"missing": [], "changed": [],
                                                  "extra": ["fifo", "gone", "masks/loop"]}
+
+
+def test_episode_config_refuses_an_unknown_format():
+    """fmt is checked when the config is made: render_episode knows only png and video."""
+    from testbed.episodes import FORMATS, EpisodeConfig
+
+    with pytest.raises(ValueError, match="fmt: unknown value 'jpg'; expected one of png, video"):
+        EpisodeConfig("lab", None, None, 4, 1, "jpg")
+    assert {EpisodeConfig("lab", None, None, 4, 1, f).fmt for f in FORMATS} == set(FORMATS)

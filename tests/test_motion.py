@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, box
 
-from scene.motion import Trajectory, circle_polygon, random_drop, random_waypoint
+from scene.motion import circle_polygon, random_drop, random_waypoint
 
 CIRCLE = circle_polygon(1.0, 360)
 LAB = box(0.0, 0.0, 6.7056, 5.7912)
@@ -100,18 +100,6 @@ def test_initial_validated():
     with pytest.raises(ValueError, match="initial"):
         random_waypoint(CIRCLE, [0.1, 0.1], 5, 0.1, 1.0, np.random.default_rng(0),
                         initial=[[0.0, 0.0], [0.05, 0.0]])
-
-
-def test_trajectory_validation():
-    t = Trajectory(np.zeros((4, 2, 2)), [0.1, 0.1], 0.1)
-    assert t.n_steps == 4 and t.positions.flags.writeable is False
-    assert np.allclose(t.times, [0, 0.1, 0.2, 0.3])
-    with pytest.raises(ValueError, match="positions"):
-        Trajectory(np.zeros((4, 2)), [0.1, 0.1], 0.1)
-    with pytest.raises(ValueError, match="radii"):
-        Trajectory(np.zeros((4, 2, 2)), [0.1], 0.1)
-    with pytest.raises(ValueError, match="dt"):
-        Trajectory(np.zeros((4, 2, 2)), [0.1, 0.1], 0.0)
 
 
 @settings(max_examples=20, deadline=None)

@@ -623,3 +623,16 @@ def test_non_convex_room_incremental_swaps_to_a_smaller_hull():
         got = choose_cameras("incremental", 2, xy, yaw, np.pi, [[0.5, 0.5]], R, room, current=current, m=1)
         assert got.tolist() == [2, 3]
         assert hull_from_wedges(w, room, got).area < 0.25 * hull_from_wedges(w, room, current).area
+
+
+def test_optimal_subset_beyond_63_cameras_is_the_smallest_table_area():
+    """More than 63 cameras do not fit uint64 bit masks: the other branch scores by the table."""
+    from tasking.coverage import optimal_subset
+
+    xy, yaw = ring_cameras(65)
+    c = np.array([[0.3, 0.1], [-0.4, 0.2]])
+    cov = coverage_cells(free_wedges_from_discs(xy, yaw, np.radians(60), c, R, ROOM), ROOM)
+    subsets = np.array(list(combinations(range(65), 2)))
+    scores = subset_areas(cov, subsets)
+    got = optimal_subset(cov, 2)
+    assert subset_areas(cov, [got])[0] == pytest.approx(scores.min(), abs=1e-12)

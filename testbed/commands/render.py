@@ -33,7 +33,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--cameras", default=None, help="comma-separated camera numbers in any order, e.g. 1,3,5 (default all)")
     p.add_argument("--format", choices=("png", "video"), default="png",
                    help="RGB frames as PNG files or one lossless FFV1 .mkv per camera (default png)")
-    p.add_argument("--params", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
+    p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=int, default=None,
                    help="local worker processes (default: number of cores, at most --episodes; "

@@ -30,13 +30,13 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
     p.add_argument("--update-every", type=int, default=1, metavar="U", help="re-task every U frames (default 1)")
     p.add_argument("--feedback", default="hull", choices=("hull", "tracks"),
-                   help="object estimates for tasking: previous hull centres (paper) or tracks")
+                   help="object estimates for tasking: previous hull centres (paper; default) or confirmed tracks")
     p.add_argument("--no-near-field", dest="near_field", action="store_false",
                    help="carve the hull from each camera's centre, as the paper's cameras, not only beyond its "
                         "blind radius (a person close to a camera, below its image, can then fall outside it)")
     p.add_argument("--frames", type=int, default=30, help="frames to run (default 30, 4 s at 7.5 Hz)")
     p.add_argument("--people", type=int, default=None, help="people in the room (default: the scene's)")
-    p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default: built-in)")
+    p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     p.add_argument("--seed", type=int, default=0, help="seed of the walk and the sensor noise (default 0)")
 
 

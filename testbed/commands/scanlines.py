@@ -30,8 +30,8 @@ from testbed.commands import plain_help
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("scanlines", help="frames to 640-bit scanlines, with metrics",
                               description=plain_help(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("dir", nargs="?", help="render directory (from `camtask render`), or a dataset of one episode")
-    p.add_argument("--params", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
+    p.add_argument("dir", nargs="?", metavar="DIR", help="render directory (from `camtask render`), or a dataset of one episode")
+    p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     p.add_argument("--frames", type=int, help="process at most this many frames")
     p.add_argument("--out", help="output .npz (default DIR/scanlines.npz, or VIDEO_scanlines.npz; "
                                  "required for an episode of a dataset)")

@@ -24,13 +24,13 @@ from testbed.commands import plain_help
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("tune", help="tune pipeline parameters for scanline F1 (Optuna)",
                               description=plain_help(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("dir", help="render directory (from `camtask render`), or a dataset of one episode")
+    p.add_argument("dir", metavar="DIR", help="render directory (from `camtask render`), or a dataset of one episode")
     p.add_argument("--trials", type=int, required=True, help="number of Optuna trials")
     p.add_argument("--seed", type=int, default=0, help="sampler seed (default 0)")
     p.add_argument("--out", help="best parameters YAML (default DIR/tuned_params.yaml; "
                                  "required for an episode of a dataset)")
     p.add_argument("--plot", help="PNG of F1 per trial and best so far")
-    p.add_argument("--params", help="starting parameters YAML (default assets/pipeline/default.yaml)")
+    p.add_argument("--params", metavar="FILE", help="starting parameters YAML (default assets/pipeline/default.yaml)")
     p.add_argument("--frames", type=int, default=30, help="use at most this many frames (default 30)")
     p.add_argument("--json", action="store_true", help="print the result as one JSON document")
     p.set_defaults(func=run)

@@ -6,4 +6,3 @@ and ``plot(result, path)``. ``runner(func, tasks, weights, desc)`` maps a module
 function over argument tuples (see :mod:`testbed.parallel`).
 """
 
-STUDIES = ("cameras", "static", "moving")

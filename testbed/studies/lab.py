@@ -29,7 +29,7 @@ def add_arguments(p) -> None:
     p.add_argument("--frames", type=int, default=40, help="frames per trial (default 40, 5.3 s)")
     p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
     p.add_argument("--update-every", type=int, default=1, help="incremental re-tasking period (default 1)")
-    p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default: built-in)")
+    p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     p.add_argument("--no-near-field", dest="near_field", action="store_false",
                    help="carve the hulls from each camera's centre, not only beyond its blind radius")
 

@@ -39,10 +39,10 @@ def add_arguments(p) -> None:
     p.add_argument("--steps", type=int, default=150, help="frames per episode (default 150, 20 s)")
     p.add_argument("--update-every", type=int, default=1, help="incremental re-tasking period (default 1)")
     p.add_argument("--m", type=int, default=1, help="cameras swapped per update (default 1)")
-    p.add_argument("--radius", type=float, default=0.1, help="disc radius (default 0.1)")
-    p.add_argument("--speed", type=float, default=SPEED, help=f"walking speed per second (default {SPEED})")
+    p.add_argument("--radius", type=float, default=0.1, help="disc radius, room units (default 0.1)")
+    p.add_argument("--speed", type=float, default=SPEED, help=f"walking speed, room units per second (default {SPEED})")
     p.add_argument("--feedback", choices=("hull", "tracks"), default="hull",
-                   help="estimates for tasking: previous hull centres (paper) or confirmed tracks")
+                   help="object estimates for tasking: previous hull centres (paper; default) or confirmed tracks")
 
 
 def parse(args) -> dict:
