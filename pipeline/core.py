@@ -64,7 +64,6 @@ class Pipeline:
         self._buf = np.zeros((self.n_cams, self.row_stride, self.width), np.uint8)
         self._terms: AngleTerms | None = None
         self._state = None
-        self._truth = None                     # process_with_truth's buffer, made on first use
         self._ranges: dict = {}                # sight_range's results, by its arguments
         self._pixels_per_radian = None         # the cameras' raw pixels per radian, for those
         if background is not None:
@@ -179,21 +178,20 @@ class Pipeline:
         Returns (scanlines, gt_scanlines), each (n_cams, W) bool; updates the temporal state.
         The opened foreground (bit 7) and the true mask (bit 0) share one image, so the
         rectification maps (~1.4 MB per camera, most of the remap's cost) are read once:
-        per column, ``F`` pixels have bit 7 and the sum of the bytes is ``128 F + T`` with
-        ``T`` the true pixels. Bit for bit what the two calls give (tests).
+        per column, the ``F`` pixels with bit 7 are the foreground count and a pixel with
+        bit 0 makes the true scanline occupied (:mod:`pipeline.truth_kernel`). Bit for bit
+        what the two calls give (tests).
         """
+        from .truth_kernel import count_columns, mark_truth  # numba: compiled on first use
+
         opened = self._foreground_stacked(frames)                 # 0/255, a fresh array
-        lab = self._check_labels(labels)
-        n, h, w = self.frame_shape
-        if self._truth is None:
-            self._truth = np.zeros((n, self.row_stride, w), np.uint8)       # zero rows between cameras
-        np.greater(lab, 0, out=self._truth[:, :h].view(bool))
-        cv2.bitwise_and(opened, 0x80, dst=opened)
-        cv2.bitwise_or(opened, self._truth.reshape(-1, w), dst=opened)
+        lab = np.ascontiguousarray(self._check_labels(labels))
+        mark_truth(opened, lab, self.row_stride)                  # bit 7 foreground, bit 0 truth
         rect = self.rectifier.remap_stacked(opened)                 # (n, Ho, W): 0, 1, 128, 129
-        fg = cv2.threshold(rect.reshape(-1, w), 127, 1, cv2.THRESH_BINARY)[1].reshape(rect.shape)
-        counts = _column_sums(fg)                                   # F
-        return self._scanlines(counts.astype(np.float64)), _column_sums(rect) > 128 * counts
+        counts = np.empty((self.n_cams, rect.shape[2]), np.int32)  # F
+        truth = np.empty(counts.shape, bool)
+        count_columns(rect, counts, truth)
+        return self._scanlines(counts.astype(np.float64)), truth
 
     def _scanlines(self, sums: np.ndarray) -> np.ndarray:
         """Column counts (n_cams, W) float64 -> scanlines (n_cams, W) bool; updates the temporal state."""

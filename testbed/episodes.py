@@ -26,21 +26,20 @@ import os
 import shutil
 import sys
 import time
+import weakref
 import zipfile
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from pipeline.files import temp_folder
-from pipeline.rectify import nonzero_boxes
 from scene.checks import check_choice
-from testbed.checksum import ALGORITHM, file_digest
+from testbed.checksum import ALGORITHM, digest, file_digest
 from testbed.dataset import frame_name, write_calibration
-from testbed.png import write_png
+from testbed.png import encode_png, write_file, write_png
 
 #: Formats of the RGB frames: PNG per frame, or one lossless FFV1 video per camera.
 FORMATS = ("png", "video")
@@ -53,6 +52,7 @@ _SCENES: OrderedDict = OrderedDict()      # (scene text, file) -> Scene, parsed 
 _RENDERERS: OrderedDict = OrderedDict()   # (scene text, people, cameras) -> Renderer
 _RECTIFIERS: OrderedDict = OrderedDict()  # (scene text, cameras) -> Rectifier, shared by that rig's pipelines
 _PIPELINES: OrderedDict = OrderedDict()   # (renderer key, parameters) -> Pipeline on its background, reset per episode
+_BACKGROUNDS: OrderedDict = OrderedDict()  # renderer key -> (weak ref to that Renderer, its background PNGs)
 
 
 def _cached(cache: OrderedDict, key, make, keep: int = KEEP):
@@ -153,6 +153,16 @@ def _renderer(config: EpisodeConfig, scene):
     return _cached(_RENDERERS, key, lambda: Renderer(scene, config.cameras))
 
 
+def _background_pngs(key, renderer) -> list[tuple[bytes, str]]:
+    """Each camera's background PNG (bytes, checksum), in ``renderer.numbers`` order: encoded
+    once per renderer, not per episode (16 lab frames: ~15 ms of fpng and checksums an
+    episode; ~8 MB kept per renderer, which is not kept alive by it)."""
+    if key in _BACKGROUNDS and _BACKGROUNDS[key][0]() is not renderer:
+        del _BACKGROUNDS[key]                   # a renderer made anew: its own background
+    pngs = lambda: [(data, digest(data)) for data in map(encode_png, renderer.background().rgb)]
+    return _cached(_BACKGROUNDS, key, lambda: (weakref.ref(renderer), pngs()))[1]
+
+
 def checksums(root: Path, known: dict[str, str] | None = None, algorithm: str = ALGORITHM,
               others: list[str] | None = None) -> dict[str, str]:
     """Checksum of every file under ``root``, keyed by the POSIX path relative to it, sorted.
@@ -246,6 +256,8 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
     (:meth:`render.Renderer.labels`, no colour work). Both are bit-identical to rendering
     each person alone (tests/test_dataset_render.py).
     """
+    from testbed.label_kernel import or_lookup  # numba: imported (and compiled) on first use
+
     pos = np.asarray(positions_xy, float)
     P, n = len(pos), len(renderer.numbers)
     dtype = silhouette_dtype(P)
@@ -266,17 +278,18 @@ def silhouettes(renderer, positions_xy: np.ndarray, labels: np.ndarray) -> np.nd
     bits = (1 << np.arange(P)).astype(dtype)
     lut = np.zeros((n, 256), dtype)                                     # label -> bit, direct people only
     lut[:, 1:P + 1] = np.where(overlap, 0, bits)
+    labels = np.ascontiguousarray(labels)
     for c in np.flatnonzero(lut.any(axis=1)):
-        for x, y, w, h in nonzero_boxes(labels[c]):                     # label 0 stays 0
-            cv2.LUT(labels[c, y:y + h, x:x + w], lut[c], dst=out[c, y:y + h, x:x + w])
+        or_lookup(labels[c], lut[c], out[c])                            # label 0 stays 0
     for i in range(P):
         cams = np.flatnonzero(overlap[:, i])
         if cams.size:
             alone = np.full_like(pos, np.nan)
             alone[i] = pos[i]
             seen = renderer.labels(alone, cameras=[renderer.numbers[c] for c in cams])
+            table = np.full(256, bits[i], dtype)                        # any label: person i
             for k, c in enumerate(cams):
-                cv2.bitwise_or(out[c], int(bits[i]), dst=out[c], mask=seen[k])
+                or_lookup(seen[k], table, out[c])
     return out
 
 
@@ -331,12 +344,11 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     motion_rng, sensor_rng = np.random.default_rng(ss).spawn(2)
     track = walk(scene, config.frames, motion_rng)
     people = scene.people
-    bg = renderer.background().rgb
     text = config.scene_yaml
 
     def pipeline():                              # background levels, ~15 MB for 16 cameras: once per worker
         rectifier = _cached(_RECTIFIERS, (text, tuple(numbers)), lambda: Rectifier.build(cameras))
-        return Pipeline(cameras, params, bg, rectifier)
+        return Pipeline(cameras, params, renderer.background().rgb, rectifier)
 
     pipe = _cached(_PIPELINES, (text, people.count, config.cameras, json.dumps(config.params, sort_keys=True)),
                    pipeline, 2 * KEEP)
@@ -349,18 +361,21 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     near, far = pipe.sight_range(people.height, **size)                 # metres: the pipeline's scanlines
     gt_near, gt_far = pipe.sight_range(people.height, truth=True, **size)    # the true ones
 
+    backgrounds = _background_pngs((text, people.count, config.cameras), renderer)
     name = episode_name(index)
     tmp = temp_folder(out, f".{name}.")
     digests: dict[str, str] = {}  # checksums of the images, computed from the bytes written
+    images = ("masks", "silhouettes") if config.fmt == "video" else ("frames", "masks", "silhouettes")
+    folders = {(sub, k): f"{sub}/{c.name}/" for sub in images for k, c in enumerate(cameras)}   # relative
     try:
         for sub in ("calibration", "background"):
             (tmp / sub).mkdir()
-        for c in cameras:
+        for k, c in enumerate(cameras):
             write_calibration(tmp / "calibration" / f"{c.name}.yaml", c)
-            digests[f"background/{c.name}.png"] = write_png(tmp / "background" / f"{c.name}.png",
-                                                            bg[numbers.index(c.number)])
-            for sub in ("masks", "silhouettes") + (("frames",) if config.fmt == "png" else ()):
-                (tmp / sub / c.name).mkdir(parents=True)
+            data, digests[f"background/{c.name}.png"] = backgrounds[k]
+            write_file(tmp / "background" / f"{c.name}.png", data)
+            for sub in images:
+                (tmp / folders[sub, k]).mkdir(parents=True)
         videos = []
         if config.fmt == "video":
             from testbed.lossless import VideoWriter
@@ -373,13 +388,13 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
             """Write frame f's images, then run the node pipeline, ground truth and hull (frames in order)."""
             t2 = time.perf_counter()
             fname = frame_name(f)
-            for k, c in enumerate(cameras):
+            for k in range(len(cameras)):
                 if videos:
                     videos[k].write(fr.rgb[k])
                 for sub, img in ((("frames", fr.rgb[k]),) if not videos else ()) + (
                         ("masks", fr.labels[k]), ("silhouettes", sil[k])):
-                    rel = f"{sub}/{c.name}/{fname}"
-                    digests[rel] = write_png(tmp / rel, img)
+                    rel = folders[sub, k] + fname
+                    digests[rel] = write_png(f"{tmp}/{rel}", img)
             t3 = time.perf_counter()
             scan, gt = pipe.process_with_truth(fr.rgb, fr.labels)
             scans.append(scan)

@@ -19,9 +19,9 @@ CPU families.
 
 from __future__ import annotations
 
+import functools
 import os
 import struct
-from pathlib import Path
 
 import fpng
 import numpy as np
@@ -37,7 +37,16 @@ _SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 def _chunk(kind: bytes, data) -> bytes:
     crc = isal_zlib.crc32(data, isal_zlib.crc32(kind))
-    return struct.pack(">I", len(data)) + kind + bytes(data) + struct.pack(">I", crc)
+    return b"".join((struct.pack(">I", len(data)), kind, data, struct.pack(">I", crc)))
+
+
+_END = _chunk(b"IEND", b"")
+
+
+@functools.lru_cache(maxsize=64)
+def _start(w: int, h: int, depth: int, colour: int) -> bytes:
+    """The signature and IHDR chunk of a (w, h) image (the same for every frame of a camera)."""
+    return _SIGNATURE + _chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, depth, colour, 0, 0, 0))
 
 
 def encode_png(image: np.ndarray) -> bytes:
@@ -66,16 +75,27 @@ def encode_png(image: np.ndarray) -> bytes:
     filtered[:, 0] = 1  # filter type SUB: each byte minus the same byte of the pixel before
     filtered[:, 1:bpp + 1] = rows[:, :bpp]
     np.subtract(rows[:, bpp:], rows[:, :-bpp], out=filtered[:, bpp + 1:])
-    header = struct.pack(">IIBBBBB", w, h, depth, colour, 0, 0, 0)
-    return (_SIGNATURE + _chunk(b"IHDR", header)
-            + _chunk(b"IDAT", isal_zlib.compress(filtered, LEVEL)) + _chunk(b"IEND", b""))
+    return b"".join((_start(w, h, depth, colour), _chunk(b"IDAT", isal_zlib.compress(filtered, LEVEL)), _END))
 
 
 def write_png(path: str | os.PathLike, image: np.ndarray) -> str:
     """Write ``image`` (see :func:`encode_png`) as a PNG file; return its checksum (:func:`testbed.checksum.digest`)."""
     data = encode_png(image)
+    write_file(path, data)
+    return digest(data)
+
+
+def write_file(path: str | os.PathLike, data) -> None:
+    """Write bytes-like ``data`` into a new (or truncated) file, as ``Path.write_bytes`` does, with
+    plain ``os`` calls (no buffered file object: ~1.3 vs 1.5 ms for a step's 48 files); a
+    one-line OSError naming the file."""
     try:
-        Path(path).write_bytes(data)
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_CLOEXEC", 0), 0o666)
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+        finally:
+            os.close(fd)
     except OSError as exc:
         raise OSError(f"cannot write {path}: {exc.strerror or exc}") from None
-    return digest(data)

@@ -9,6 +9,8 @@ import blake3
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from testbed.cli import main
 from testbed.dataset import read_people
@@ -158,6 +160,54 @@ def test_silhouettes_exact_with_sixteen_bit_masks():
         alone[i] = pos[i]
         np.testing.assert_array_equal((sil >> i) & 1 == 1, r.labels(alone) > 0)
     assert sil.any()
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(1, 12), st.integers(1, 37), st.booleans(), st.floats(0.0, 1.0), st.integers(0, 2**32 - 1))
+def test_or_lookup_equals_a_look_up_table_and_a_masked_or(h, w, wide, fill, seed):
+    """The silhouettes' compiled look-up: table[label] ORed in where the label is not 0,
+    the rest left alone, for any width (not only multiples of 8) and 16-bit masks."""
+    from testbed.label_kernel import or_lookup
+
+    rng = np.random.default_rng(seed)
+    dtype = np.uint16 if wide else np.uint8
+    labels = np.where(rng.random((h, w)) < fill, rng.integers(1, 256, (h, w)), 0).astype(np.uint8)
+    table = rng.integers(0, 65536 if wide else 256, 256).astype(dtype)
+    out = rng.integers(0, 65536 if wide else 256, (h, w)).astype(dtype)
+    want = np.where(labels != 0, out | table[labels], out)
+    assert or_lookup(labels, table, out) is out
+    np.testing.assert_array_equal(out, want)
+    with pytest.raises(ValueError, match="table: expected"):
+        or_lookup(labels, table.astype(np.uint32), out)
+
+
+def test_background_pngs_are_encoded_once_per_renderer(tmp_path, monkeypatch):
+    """A process's later episodes write the background PNGs encoded for its first (same
+    bytes); a renderer made anew (another process, an evicted cache) encodes its own."""
+    from collections import OrderedDict
+
+    from testbed import episodes
+
+    encoded = []
+    real = episodes.encode_png
+    monkeypatch.setattr(episodes, "encode_png", lambda img: encoded.append(1) or real(img))
+    monkeypatch.setattr(episodes, "_BACKGROUNDS", OrderedDict())
+    config = episodes.EpisodeConfig("lab", 1, (2, 7), 1, 3)
+    runs = []
+    for index in range(2):
+        runs.append(episodes.render_episode(config, index, str(tmp_path))["files"])
+    assert len(encoded) == 2                                   # two cameras, once
+    fresh = OrderedDict()
+    with monkeypatch.context() as m:
+        m.setattr(episodes, "_RENDERERS", fresh)
+        runs.append(episodes.render_episode(config, 2, str(tmp_path))["files"])
+    for r in fresh.values():
+        r.close()
+    assert len(encoded) == 4
+    for cam in ("cam02", "cam07"):
+        assert len({files[f"background/{cam}.png"] for files in runs}) == 1
+        assert (tmp_path / "episode_0000" / "background" / f"{cam}.png").read_bytes() == \
+            (tmp_path / "episode_0002" / "background" / f"{cam}.png").read_bytes()
 
 
 def test_same_bytes_with_two_workers(dataset, tmp_path):

@@ -519,3 +519,26 @@ def test_a_level_undistorted_camera_sees_into_both_edge_columns(width):
     frame[0, :, width - 3:] = (200, 40, 40)                   # someone cut by the right border
     for pipe in (Pipeline([cam], params, bg), ReferencePipeline([cam], params, bg)):
         assert pipe.process(frame)[0].nonzero()[0].tolist() == [width - 3, width - 2, width - 1]
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(1, 4), st.integers(1, 20), st.integers(0, 3), st.integers(1, 33),
+       st.sampled_from([np.uint8, np.int32, np.int64, bool]), st.integers(0, 2**32 - 1))
+def test_truth_kernels_equal_their_numpy_formulas(n, h, extra, w, dtype, seed):
+    """process_with_truth's compiled steps: bit 7 kept and bit 0 set where a label is
+    positive (rows between cameras untouched), then per column the bit-7 count and any bit 0."""
+    from pipeline.truth_kernel import count_columns, mark_truth
+
+    rng = np.random.default_rng(seed)
+    rows = h + extra
+    opened = rng.choice(np.array([0, 255], np.uint8), (n * rows, w))
+    labels = rng.integers(-2 if np.issubdtype(dtype, np.signedinteger) else 0, 4, (n, h, w)).astype(dtype)
+    want = opened.copy().reshape(n, rows, w)
+    want[:, :h] = (want[:, :h] & 128) | (labels > 0)
+    got = mark_truth(opened, labels, rows)
+    np.testing.assert_array_equal(got.reshape(n, rows, w), want)
+    rect = rng.choice(np.array([0, 1, 128, 129], np.uint8), (n, h, w), p=[0.7, 0.1, 0.1, 0.1])
+    counts, truth = np.empty((n, w), np.int32), np.empty((n, w), bool)
+    count_columns(rect, counts, truth)
+    np.testing.assert_array_equal(counts, (rect >= 128).sum(axis=1))
+    np.testing.assert_array_equal(truth, (rect & 1).any(axis=1))

@@ -46,3 +46,41 @@ def test_bad_images_are_refused(bad):
 def test_unwritable_path_is_one_line(tmp_path):
     with pytest.raises(OSError, match="cannot write"):
         write_png(tmp_path / "missing" / "a.png", np.zeros((2, 2), np.uint8))
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(1, 40), st.integers(1, 40), st.booleans(), st.integers(0, 2**32 - 1))
+def test_grey_pngs_are_the_chunks_of_the_sub_filter_and_isal(h, w, wide, seed):
+    """Grey PNGs byte for byte: signature, IHDR, one IDAT of the SUB-filtered rows deflated by
+    ISA-L at LEVEL, IEND (the header and end chunks are made once, not per image)."""
+    import struct
+
+    from isal import isal_zlib
+
+    from testbed.png import LEVEL
+
+    rng = np.random.default_rng(seed)
+    img = rng.integers(0, 65536 if wide else 256, (h, w), dtype=np.uint16 if wide else np.uint8)
+    rows = img.astype(">u2" if wide else np.uint8).view(np.uint8).reshape(h, -1)
+    bpp = 2 if wide else 1
+    sub = np.concatenate([np.ones((h, 1), np.uint8), rows[:, :bpp],
+                          (rows[:, bpp:].astype(int) - rows[:, :-bpp]).astype(np.uint8)], axis=1)
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", isal_zlib.crc32(kind + data))
+
+    want = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8 * bpp, 0, 0, 0, 0))
+            + chunk(b"IDAT", isal_zlib.compress(sub.tobytes(), LEVEL)) + chunk(b"IEND", b""))
+    assert encode_png(img) == want
+
+
+def test_write_file_replaces_a_longer_file_whole(tmp_path):
+    from testbed.png import write_file
+
+    path = tmp_path / "a.png"
+    path.write_bytes(b"x" * 100)
+    write_file(str(path), memoryview(b"abc"))
+    assert path.read_bytes() == b"abc"
+    big = np.random.default_rng(2).integers(0, 256, 3 << 20, dtype=np.uint8).tobytes()
+    write_file(path, big)
+    assert path.read_bytes() == big
