@@ -65,6 +65,10 @@ void main() { frag = vec4(v_colour, v_label); }
 HIDDEN = 1.0e6
 
 
+#: The most people a frame can label: uint8 labels, 0 the background and 255 reserved.
+MAX_PEOPLE = 254
+
+
 @dataclass
 class Page:
     """One framebuffer: bands ``first .. first + tiles - 1``, band ``first`` at the bottom.
@@ -101,8 +105,8 @@ class Rasteriser:
 
     def __init__(self, mesh: Mesh, n_people: int, width: int, height: int, n_tiles: int,
                  backend: str = "egl", near_only: int = 0):
-        if n_people > 254:
-            raise ValueError(f"people.count: expected at most 254 people (uint8 labels), got {n_people}")
+        if n_people > MAX_PEOPLE:
+            raise ValueError(f"people.count: expected at most {MAX_PEOPLE} people (uint8 labels), got {n_people}")
         self.backend, GL = gl.context(backend)
         self.GL = GL
         self.width, self.height, self.n_tiles = int(width), int(height), int(n_tiles)

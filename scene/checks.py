@@ -84,6 +84,23 @@ def check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
     return x
 
 
+def check_between(name: str, value: Any, low: float, high: float, unit: str, *, low_open: bool = False) -> float:
+    """``value`` as a finite float > ``low`` (``low_open``) or >= ``low``, and at most ``high``, else
+    a one-line ValueError naming ``name``, the range and ``unit``.
+
+    >>> check_between("frame_rate", 1e-300, 1e-3, 1000, "Hz")
+    Traceback (most recent call last):
+    ...
+    ValueError: frame_rate: expected a finite number >= 0.001 and at most 1000 Hz, got 1e-300
+    """
+    x = _number(name, value)
+    if not (np.isfinite(x) and low <= x <= high) or (low_open and x == low):
+        most = f" and at most {high:g}" if np.isfinite(high) else ""
+        raise ValueError(f"{name}: expected a finite number {'>' if low_open else '>='} {low:g}{most} {unit}, "
+                         f"got {value!r}")
+    return x
+
+
 def check_int(name: str, value: Any, *, minimum: int | None = None) -> int:
     """Return ``value`` as an int, optionally at least ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):

@@ -20,6 +20,7 @@ from . import yamlio
 from .camera import Camera, FloorCamera
 from .checks import (
     check_array,
+    check_between,
     check_choice,
     check_finite,
     check_int,
@@ -35,6 +36,22 @@ ASSETS = Path(__file__).resolve().parent.parent / "assets"
 #: side on llvmpipe, and each camera's canvas adds at least 2 pixels on each side (lens
 #: distortion can ask for more: such a camera is refused when its renderer is built).
 MAX_RESOLUTION = 16380
+#: Frame rates, Hz: below one frame in about 17 minutes a walk is a teleport (and at 1e-300 Hz the
+#: tracker's dt**2 overflowed); 1e300 Hz failed in ffmpeg after `run --video` had started (10**4
+#: writes; `render --format video` takes at most 1000, testbed.lossless.MAX_FPS).
+FRAME_RATE_RANGE = (1e-3, 1e4)
+#: The largest room side (a rectangle's width, depth, a circle's radius, any room's height), metres:
+#: the rendered floor is 1-ft tiles, 11 s and 0.65 GB for a 100 m room, 50 s and 1.7 GB for 300 m,
+#: memory without end for 10**6 m (and 1e300 m overflowed); at 100 m the lab's cameras see a person
+#: a few pixels wide.
+MAX_ROOM_SIZE = 100.0
+#: The smallest person (radius and height), metres: a 1e-300 m radius underflowed the capacity check.
+MIN_PERSON_SIZE = 1e-3
+#: The fastest walk, m/s: at 1e300 m/s the tracker's process noise overflowed.
+MAX_SPEED = 100.0
+#: The most cameras in a ring (as the studies' ``--cameras``): a ring of 10**9 filled the memory
+#: building them one by one.
+MAX_RING_CAMERAS = 10_000
 BUILTIN_SCENES = ("lab", "circle")
 BACKENDS = ("egl", "osmesa")
 
@@ -176,7 +193,7 @@ def _parse_scene(config: Any, source: str) -> Scene:
         room=room,
         cameras=cameras,
         people=people,
-        frame_rate=check_positive("frame_rate", config.get("frame_rate", 7.5)),
+        frame_rate=check_between("frame_rate", config.get("frame_rate", 7.5), *FRAME_RATE_RANGE, "Hz"),
         render=render,
         uniform_sets=uniform,
     )
@@ -185,6 +202,9 @@ def _parse_scene(config: Any, source: str) -> Scene:
 def _parse_room(cfg: Any) -> Room:
     check_mapping("room", cfg, ("shape", "width", "depth", "radius", "height"), ("shape",))
     shape = check_choice("room.shape", cfg["shape"], ("rectangle", "circle"))
+    for key in ("width", "depth", "radius", "height"):
+        if key in cfg:
+            check_between(f"room.{key}", cfg[key], 0.0, MAX_ROOM_SIZE, "m", low_open=True)
     if shape == "rectangle":
         check_mapping("room", cfg, ("shape", "width", "depth", "height"), ("width", "depth", "height"))
         return Room.rectangle(cfg["width"], cfg["depth"], cfg["height"])
@@ -243,6 +263,8 @@ def _parse_ring(cfg: Any, room: Room) -> tuple:
     if room.kind != "circle":
         raise ValueError("cameras.ring: a ring of cameras needs a circular room")
     n = check_int("cameras.ring.count", cfg["count"], minimum=1)
+    if n > MAX_RING_CAMERAS:
+        raise ValueError(f"cameras.ring.count: expected at most {MAX_RING_CAMERAS} cameras, got {n}")
     fov = _check_fov("cameras.ring.fov_deg", cfg["fov_deg"], maximum=180.0)
     radius = float(np.max(np.linalg.norm(room.vertices, axis=1)))
     angles = 2 * np.pi * np.arange(n) / n
@@ -271,11 +293,11 @@ def _check_numbers(cameras) -> None:
 def _parse_people(cfg: Any, room: Room) -> People:
     check_mapping("people", cfg, ("count", "radius", "height", "speed", "colours", "positions"), ("count", "radius"))
     count = check_int("people.count", cfg["count"], minimum=0)
-    radius = check_positive("people.radius", cfg["radius"])
-    height = check_positive("people.height", cfg.get("height", 1.75))
+    radius = check_between("people.radius", cfg["radius"], MIN_PERSON_SIZE, np.inf, "m")
+    height = check_between("people.height", cfg.get("height", 1.75), MIN_PERSON_SIZE, np.inf, "m")
     if height > room.height:
         raise ValueError(f"people.height: {height:g} m is above the ceiling ({room.height:g} m, room.height)")
-    speed = check_positive("people.speed", cfg.get("speed", 1.0))
+    speed = check_between("people.speed", cfg.get("speed", 1.0), 0.0, MAX_SPEED, "m/s", low_open=True)
     check_person_fits("people.radius", radius, room)
     positions = cfg.get("positions")        # before the colours: a count of 10**9 is refused, not allocated
     if positions is None:

@@ -39,6 +39,15 @@ def check_renderable(scene: Scene, option: str) -> None:
     check_rectifiable(scene.cameras)
 
 
+def check_people_renderable(scene: Scene, option: str) -> None:
+    """Raise a one-line ValueError naming ``option`` when the scene has more people than a
+    frame's uint8 labels hold (before the walk: 10**5 small people took minutes to drop)."""
+    from render.raster import MAX_PEOPLE
+
+    if scene.people.count > MAX_PEOPLE:
+        raise ValueError(f"{option}: expected at most {MAX_PEOPLE} people (uint8 labels), got {scene.people.count}")
+
+
 def walk(scene: Scene, frames: int, rng: np.random.Generator) -> np.ndarray:
     """Random-waypoint positions of the scene's people, (frames, people, 2) float, metres."""
     people = scene.people

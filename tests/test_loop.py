@@ -274,3 +274,27 @@ def test_feedback_tracks_tasks_from_the_trackers_predictions(monkeypatch):
         centres = results[i].estimates
         # predictions of the confirmed tracks, not the polygon centres
         assert not (passed[i].shape == centres.shape and np.allclose(passed[i], centres))
+
+
+def test_more_people_than_labels_are_refused_before_the_walk(capsys, tmp_path, monkeypatch):
+    """100000 people of 1 mm fit the floor, and `run` spent minutes dropping them before the
+    renderer refused more than 254 (uint8 labels)."""
+    import testbed.episode
+
+    def walk(*args, **kwargs):
+        raise AssertionError("walked before the people count was checked")
+
+    monkeypatch.setattr(testbed.episode, "walk", walk)
+    text = load_scene_text().replace("radius: 0.25 ", "radius: 0.01 ").replace("count: 3", "count: 300")
+    (tmp_path / "crowd.yaml").write_text(text)
+    assert main(["run", str(tmp_path / "crowd.yaml"), "--frames", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "people.count of" in err[0] and "expected at most 254 people (uint8 labels), got 300" in err[0]
+    assert main(["run", "lab", "--people", "300", "--frames", "1"]) == 2      # the lab's 0.25 m: by area first
+    assert "do not fit in the room" in capsys.readouterr().err
+
+
+def load_scene_text():
+    from scene import scene_path
+
+    return scene_path("lab").read_text()

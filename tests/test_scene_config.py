@@ -121,7 +121,7 @@ def _set(config, path, value):
     (("room", "colour"), "red", "room: unknown key 'colour'"),
     (("room", "width"), -1, r"room.width: expected a finite number > 0"),
     (("room", "height"), 0, r"room.height: expected a finite number > 0"),
-    (("people", "radius"), 0, r"people.radius: expected a finite number > 0"),
+    (("people", "radius"), 0, r"people.radius: expected a finite number >= 0.001 m, got 0"),
     (("people", "count"), -2, r"people.count: expected an integer >= 0"),
     (("cameras", "intrinsics", "hfov_deg"), 0, r"hfov_deg: expected a field of view in \(0, 179\]"),
     (("cameras", "intrinsics", "hfov_deg"), 200, r"hfov_deg: expected a field of view"),
@@ -320,3 +320,39 @@ def test_params_yaml_syntax_error_says_what_and_where(tmp_path):
 def test_people_taller_than_the_ceiling_are_refused():
     with pytest.raises(ValueError, match=r"people.height: 10 m is above the ceiling \(2.7 m, room.height\)"):
         Scene.from_text(LAB.replace("  height: 1.75 ", "  height: 10.0 "), "s.yaml")
+
+
+# ---- extreme numbers: each was a traceback, a hang, or loaded without a word
+CIRCLE = scene_path("circle").read_text()
+
+
+@pytest.mark.parametrize("text, match", [
+    # OverflowError (dt**2) in `run`'s tracker, not naming the key
+    (LAB.replace("frame_rate: 7.5", "frame_rate: 1e-300"), r"frame_rate: expected a finite number >= 0.001 and at most 10000 Hz, got 1e-300"),
+    # an ffmpeg error after the first frame of `run --video`
+    (LAB.replace("frame_rate: 7.5", "frame_rate: 1e300"), r"frame_rate: expected .* at most 10000 Hz, got 1e\+300"),
+    # "Maximum allowed size exceeded" from the floor's tiles, not naming the key
+    (LAB.replace("width: 6.7056", "width: 1e300"), r"room.width: expected a finite number > 0 and at most 100 m, got 1e\+300"),
+    (LAB.replace("height: 2.7", "height: 1e300"), r"room.height: expected .* at most 100 m"),
+    # a 10**6 m room loaded, then `run` tiled its floor for hours
+    (LAB.replace("depth: 5.7912", "depth: 1000000.0"), r"room.depth: expected .* at most 100 m, got 1000000.0"),
+    # "camera.xy: expected finite numbers" (the cameras' positions overflowed)
+    (CIRCLE.replace("radius: 1.0", "radius: 1e300"), r"room.radius: expected .* at most 100 m"),
+    # ZeroDivisionError in the capacity check
+    (LAB.replace("radius: 0.25 ", "radius: 1e-300 "), r"people.radius: expected a finite number >= 0.001 m, got 1e-300"),
+    (LAB.replace("height: 1.75 ", "height: 1e-300 "), r"people.height: expected a finite number >= 0.001 m"),
+    # OverflowError (accel_std**2) in `run`'s tracker
+    (LAB.replace("speed: 1.0 ", "speed: 1e300 "), r"people.speed: expected a finite number > 0 and at most 100 m/s"),
+    # a ring of 10**9 cameras filled the memory (20000 loaded, slowly enough to show the point)
+    (CIRCLE.replace("count: 16", "count: 20000"), r"cameras.ring.count: expected at most 10000 cameras, got 20000"),
+])
+def test_extreme_numbers_are_refused_on_loading_naming_the_key(text, match):
+    with pytest.raises(ValueError, match=match):
+        Scene.from_text(text, "s.yaml")
+
+
+def test_the_bounds_keep_the_built_in_scenes_and_their_edges():
+    Scene.from_text(LAB.replace("frame_rate: 7.5", "frame_rate: 10000"), "s.yaml")
+    Scene.from_text(LAB.replace("frame_rate: 7.5", "frame_rate: 0.001"), "s.yaml")
+    Scene.from_text(LAB.replace("width: 6.7056", "width: 100"), "s.yaml")
+    Scene.from_text(CIRCLE.replace("count: 16", "count: 10000"), "s.yaml")

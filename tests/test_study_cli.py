@@ -168,3 +168,26 @@ def test_a_run_refused_on_another_argument_leaves_no_plot_folder(capsys, tmp_pat
     png = tmp_path / "new" / "deeper" / "c.png"
     assert cli.main(["study", "cameras", "--objects", "0", "--plot", str(png)]) == 2
     assert "--objects" in capsys.readouterr().err and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("argv, message", [
+    # an OverflowError traceback from the tracker
+    (("tracking", "--speed", "1e300"), "--speed: expected a finite number > 0 and at most 100, got 1e+300"),
+    # "speed: expected finite numbers >= 0": the flag not named
+    (("tracking", "--speed", "nan"), "--speed: expected a finite number > 0 and at most 100, got nan"),
+    # ran, walking discs 1e300 m per frame
+    (("moving", "--speed", "1e300"), "--speed: expected a finite number >= 0 and at most 100, got 1e+300"),
+    (("moving", "--dt", "1e300"), "--dt: expected a finite number > 0 and at most 1000, got 1e+300"),
+    # "radii: 1000 discs ... cannot fit" (10**9 filled the memory first)
+    (("static", "--objects", "1000"), ("--objects: 1000 discs of radius 0.1 do not fit in the room of radius 1; "
+                                       "expected at most 99")),
+    (("cameras", "--objects", "1,200"), "--objects: 200 discs"),
+    # ran (10**9 candidates: the machine killed the run)
+    (("static", "--candidates", "20000", "--k", "2", "--taskers", "uniform"),
+     "--candidates: expected at most 10000 cameras, got 20000"),
+])
+def test_extreme_numbers_are_one_line_naming_the_flag(capsys, argv, message):
+    assert cli.main(["study", *argv, "--trials", "1", "--workers", "0", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("camtask study: error: ") and message in err
+    assert "\n" not in err

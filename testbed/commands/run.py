@@ -45,7 +45,7 @@ def prepare(args):
     from pipeline import load_params
     from scene import load_scene
     from testbed.cli import check_seed
-    from testbed.episode import check_renderable, walk, with_people
+    from testbed.episode import check_people_renderable, check_renderable, walk, with_people
     from testbed.loop import LoopConfig
     from testbed.output import check_output_file
 
@@ -59,6 +59,7 @@ def prepare(args):
     if scene.people.count == 0:
         option = "--people" if args.people is not None else f"people.count of {args.scene}"
         raise ValueError(f"{option}: expected at least 1 person to track, got 0")
+    check_people_renderable(scene, "--people" if args.people is not None else f"people.count of {args.scene}")
     config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback, args.near_field).check(
         len(scene.cameras), as_options=True)
     params = load_params(args.params)

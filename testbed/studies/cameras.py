@@ -44,6 +44,7 @@ def add_arguments(p) -> None:
 def parse(args) -> dict:
     objects = core.parse_ints("objects", args.objects, minimum=1)
     cameras = core.parse_ints("cameras", args.cameras, minimum=2)
+    core.check_cameras("cameras", max(cameras))
     lim = str(args.limit_cameras).strip().lower()
     if lim in ("inf", "exact", "infinite"):
         limit = None
@@ -54,11 +55,13 @@ def parse(args) -> dict:
             raise ValueError(f"--limit-cameras: expected an integer >= 2 or 'inf', got {args.limit_cameras!r}") from None
         if limit < 2:
             raise ValueError(f"--limit-cameras: expected an integer >= 2 or 'inf', got {limit}")
+        core.check_cameras("limit-cameras", limit)
         if limit <= max(cameras):                 # the limit stands for infinitely many cameras
             raise ValueError(f"--limit-cameras: expected more cameras than the largest --cameras "
                              f"({max(cameras)}), got {limit}")
     if not 0 < args.radius < 0.5:
         raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
+    core.check_objects("objects", max(objects), args.radius)
     quadrature = args.radius / QUADRATURE_PER_RADIUS if args.quadrature is None else args.quadrature
     if not args.radius / 1000 <= quadrature <= 0.05:
         raise ValueError(f"--quadrature: expected a number in [radius / 1000, 0.05] = [{args.radius / 1000:g}, 0.05], "

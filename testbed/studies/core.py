@@ -119,6 +119,42 @@ def parse_ints(name: str, text, *, minimum: int = 1) -> list[int]:
     return sorted(out)
 
 
+#: The most cameras a study may put on the circle (--cameras, --limit-cameras, --candidates, a
+#: uniform k of --pairs): five times the paper's 2000-camera "infinite" case. 10**9 asked for
+#: gigabytes per array and the machine killed the run; 10**5 took over 5 minutes a trial, deaf to
+#: SIGTERM inside the hull; 10**4 takes 6 s (cameras) to 26 s (tracking, 2 frames).
+MAX_CAMERAS = 10_000
+#: The fastest walk, room radii per second, and the longest frame, seconds (--speed, --dt):
+#: at 1e300 the tracker's process noise overflowed, and the walks were teleports long before.
+MAX_SPEED = 100.0
+MAX_DT = 1000.0
+
+
+def check_cameras(name: str, n: int) -> int:
+    """``n`` cameras on the circle, at most :data:`MAX_CAMERAS`, else a one-line error naming ``--name``."""
+    if n > MAX_CAMERAS:
+        raise ValueError(f"--{name}: expected at most {MAX_CAMERAS} cameras, got {n}")
+    return n
+
+
+def check_objects(name: str, objects: int, radius: float) -> int:
+    """``objects`` discs of ``radius`` must fit in the circular room by area (what
+    :func:`scene.motion.random_drop` asks), checked before any array of them is made."""
+    most = int(circle_room().area // (np.pi * radius**2))
+    if objects > most:
+        raise ValueError(f"--{name}: {objects} discs of radius {radius:g} do not fit in the room of radius 1; "
+                         f"expected at most {most}")
+    return objects
+
+
+def check_bounded(name: str, value: float, low: float, high: float, *, low_open: bool = False) -> float:
+    """``value`` finite, >= ``low`` (> with ``low_open``) and at most ``high``, else a one-line error."""
+    if not (np.isfinite(value) and low <= value <= high) or (low_open and value == low):
+        raise ValueError(f"--{name}: expected a finite number {'>' if low_open else '>='} {low:g} and at most "
+                         f"{high:g}, got {value}")
+    return float(value)
+
+
 def parse_names(name: str, text: str, valid) -> list[str]:
     """Parse ``"a,b"`` into names, each one of ``valid`` (order kept, duplicates dropped)."""
     names = [s.strip() for s in str(text).split(",") if s.strip()]

@@ -36,12 +36,13 @@ def add_arguments(p) -> None:
 
 def parse(args) -> dict:
     from scene import load_scene
-    from testbed.episode import check_renderable, with_people
+    from testbed.episode import check_people_renderable, check_renderable, with_people
 
     scene = with_people(load_scene(args.scene), args.people)
     check_renderable(scene, "--scene")
     if args.people < 1:
         raise ValueError(f"--people: expected an integer >= 1, got {args.people}")
+    check_people_renderable(scene, "--people")
     ks = core.parse_ints("k", args.k, minimum=1)
     if max(ks) > len(scene.cameras):
         raise ValueError(f"--k: {max(ks)} cameras exceed the scene's {len(scene.cameras)}")

@@ -46,6 +46,7 @@ def parse(args) -> dict:
         raise ValueError(f"--objects: expected an integer >= 1, got {args.objects}")
     if args.candidates < 2:
         raise ValueError(f"--candidates: expected an integer >= 2, got {args.candidates}")
+    core.check_cameras("candidates", args.candidates)
     ks = core.parse_ints("k", args.k, minimum=1)
     if max(ks) > args.candidates:
         raise ValueError(f"--k: {max(ks)} cameras exceed the {args.candidates} candidates")
@@ -55,10 +56,11 @@ def parse(args) -> dict:
         raise ValueError(f"--m: expected an integer in [1, min(k) = {min(ks)}], got {args.m}")
     if args.steps < 2:
         raise ValueError(f"--steps: expected an integer >= 2, got {args.steps}")
-    if not args.dt > 0 or not args.speed >= 0:
-        raise ValueError("--dt and --speed: expected dt > 0 and speed >= 0")
+    core.check_bounded("dt", args.dt, 0.0, core.MAX_DT, low_open=True)
+    core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED)
     if not 0 < args.radius < 0.5:
         raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
+    core.check_objects("objects", args.objects, args.radius)
     return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),
             "taskers": taskers, "update_every": us, "m": int(args.m), "steps": int(args.steps),
             "dt": float(args.dt), "speed": float(args.speed), "radius": float(args.radius)}

@@ -34,6 +34,7 @@ def parse(args) -> dict:
         raise ValueError(f"--objects: expected an integer >= 1, got {args.objects}")
     if args.candidates < 2:
         raise ValueError(f"--candidates: expected an integer >= 2, got {args.candidates}")
+    core.check_cameras("candidates", args.candidates)
     ks = core.parse_ints("k", args.k, minimum=1)
     if max(ks) > args.candidates:
         raise ValueError(f"--k: {max(ks)} cameras exceed the {args.candidates} candidates")
@@ -45,6 +46,7 @@ def parse(args) -> dict:
                          f"{args.max_subsets}")
     if not 0 < args.radius < 0.5:
         raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
+    core.check_objects("objects", args.objects, args.radius)
     return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),
             "taskers": taskers, "radius": float(args.radius), "max_subsets": int(args.max_subsets)}
 

@@ -54,14 +54,15 @@ def parse(args) -> dict:
                              f"incremental, got {part!r}")
         if name != "uniform" and int(k) > CANDIDATES:
             raise ValueError(f"--pairs: k = {k} exceeds the {CANDIDATES} candidate cameras")
+        core.check_cameras("pairs", int(k))
         pairs.append((name, int(k)))
     for name in ("objects", "steps", "update_every", "m"):
         if getattr(args, name) < 1:
             raise ValueError(f"--{name.replace('_', '-')}: expected an integer >= 1, got {getattr(args, name)}")
     if not 0 < args.radius < 0.5:
         raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
-    if args.speed <= 0:
-        raise ValueError(f"--speed: expected a number > 0, got {args.speed}")
+    core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED, low_open=True)
+    core.check_objects("objects", args.objects, args.radius)
     swapped = [k for name, k in pairs if name == "incremental"]
     if swapped and args.m > min(swapped):
         raise ValueError(f"--m: expected at most the smallest incremental k = {min(swapped)}, got {args.m}")
