@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import fcntl
+import itertools
 import json
 import os
 import platform
@@ -542,7 +543,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
     """
     out = Path(out)
     done = dict(keep)
-    todo = [i for i in range(episodes) if i not in done]
+    todo = (i for i in range(episodes) if i not in done)     # lazily: --episodes may be large
     info = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "host": socket.gethostname(),
             "versions": versions(), "argv": sys.argv[1:]} | (run_info or {})
     earlier = earlier_runs(out)                     # a resumed run's predecessors, kept in run_info.json
@@ -580,9 +581,15 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
             # index -> future of the episodes not yet listed; a listed one is dropped at once, so
             # the cluster lets go of its result (a checksum per file: ~3 MB for 300 frames). No
             # distributed.wait(timeout=...): its TimeoutError's traceback kept every future it
-            # was given alive until the garbage collector broke the cycle.
-            pending = {i: submit(i) for i in todo}
-            shown = dict.fromkeys(todo, 0)          # frames counted per episode so far
+            # was given alive until the garbage collector broke the cycle. At most
+            # in_flight(client) episodes are submitted at a time: 200 000 submitted at once
+            # slowed rendering tenfold (and took minutes to cancel), 10**12 filled the memory.
+            pending: dict = {}
+            shown: dict[int, int] = {}              # frames counted per episode so far
+
+            def top_up() -> None:
+                for i in itertools.islice(todo, max(0, in_flight(client) - len(pending))):
+                    pending[i], shown[i] = submit(i), 0
 
             def show(index: int, frames: int) -> None:
                 if progress is not None and frames > shown[index]:
@@ -590,6 +597,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                     shown[index] = frames
 
             try:
+                top_up()
                 while pending:
                     ready.clear()                   # an episode ending from here on wakes the wait below
                     for index in [i for i, f in pending.items() if f.done()]:
@@ -597,6 +605,8 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                         finished(entry, host, secs)
                         del pending[index]
                         show(index, entry["frames"])
+                        del shown[index]
+                    top_up()
                     for index, frames in (frames_in_progress(out) if progress else {}).items():
                         if index in shown:
                             show(index, min(frames, config.frames - 1))
@@ -651,6 +661,13 @@ def frames_in_progress(out: Path) -> dict[int, int]:
         except (ValueError, IndexError, OSError):
             continue
     return counts
+
+
+def in_flight(client) -> int:
+    """How many episodes to keep submitted to ``client``: two per worker thread (one running,
+    one queued, so no thread waits for the next submission), at least 4 (no worker has
+    joined an external scheduler yet)."""
+    return max(4, 2 * sum(client.nthreads().values()))
 
 
 def episode_key(index: int) -> str:

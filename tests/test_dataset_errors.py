@@ -472,3 +472,52 @@ def test_episode_config_refuses_an_unknown_format():
     with pytest.raises(ValueError, match="fmt: unknown value 'jpg'; expected one of png, video"):
         EpisodeConfig("lab", None, None, 4, 1, "jpg")
     assert {EpisodeConfig("lab", None, None, 4, 1, f).fmt for f in FORMATS} == set(FORMATS)
+
+
+def test_dask_runs_keep_a_few_episodes_submitted_not_all(tmp_path, monkeypatch):
+    """--episodes 200000 submitted at once slowed rendering tenfold; 10**12 filled the memory."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    class Future:
+        def __init__(self, fn, args):
+            self.fn, self.args, self.polls = fn, args, 0
+
+        def add_done_callback(self, callback):
+            pass
+
+        def done(self):                                     # done at the second look
+            self.polls += 1
+            return self.polls > 1
+
+        def result(self):
+            return self.fn(*self.args)
+
+        def cancel(self):
+            pass
+
+    class Client:
+        def __init__(self):
+            self.submitted, self.most = [], 0
+
+        def nthreads(self):
+            return {"tcp://worker-1": 1, "tcp://worker-2": 1}
+
+        def submit(self, fn, *args, pure, key):
+            self.submitted.append(Future(fn, args))
+            self.most = max(self.most, sum(not f.polls > 1 for f in self.submitted))
+            return self.submitted[-1]
+
+    def episode(config, index, out, seconds=None):
+        return {"index": index, "name": f"episode_{index:04d}", "seed": config.seed, "spawn_key": [index],
+                "frames": config.frames, "files": {}}
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 30, False, False)
+    monkeypatch.setattr(gen, "render_episode", episode)
+    client = Client()
+    done = gen.generate(config, 30, out, {}, client)
+    assert sorted(done) == list(range(30)) and len(client.submitted) == 30
+    assert client.most == 4 == gen.in_flight(client)         # two per worker thread, at least 4
