@@ -88,7 +88,7 @@ class PipelineParams:
         set_ = lambda k, v: object.__setattr__(self, k, v)
         set_("threshold_deg", check_range("threshold_deg", self.threshold_deg, 0, 90, low_open=True, high_open=True))
         set_("brightness_floor", check_range("brightness_floor", self.brightness_floor, 0, 442))
-        set_("dark_delta", check_positive("dark_delta", self.dark_delta, allow_zero=True))
+        set_("dark_delta", check_range("dark_delta", self.dark_delta, 0, 442))    # |RGB difference| <= 255 sqrt 3
         for name in ("opening_kernel", "spatial_kernel", "median_kernel"):
             set_(name, check_odd_kernel(name, getattr(self, name)))
         set_("temporal_alpha", check_range("temporal_alpha", self.temporal_alpha, 0, 1, low_open=True))

@@ -104,6 +104,23 @@ def check_lens(camera: Camera, samples: int = 33) -> None:
                          f"inside its image ({how}); use smaller distortion coefficients")
 
 
+def check_column_threshold(column_threshold: float, cameras, option: str) -> None:
+    """Raise a one-line ValueError naming ``option`` when ``column_threshold`` (pixels) is
+    above the rows of the cameras' rectified columns: every scanline would be empty (the
+    :class:`Pipeline` itself allows it; ``render`` and ``run`` check it before any work).
+
+    >>> from scene import load_scene
+    >>> check_column_threshold(600, load_scene("lab").cameras, "--params")
+    Traceback (most recent call last):
+    ...
+    ValueError: --params: column_threshold 600 exceeds the 552 pixels of a rectified column; every scanline would be empty
+    """
+    rows = level_cameras(cameras)[1]
+    if column_threshold > rows:
+        raise ValueError(f"{option}: column_threshold {column_threshold:g} exceeds the {rows} pixels of a rectified "
+                         "column; every scanline would be empty")
+
+
 def check_rectifiable(cameras) -> None:
     """Raise the one-line error of :func:`check_lens` or :func:`virtual_extent` for the first
     camera whose lens folds over or that cannot be rectified to a level camera (before any

@@ -25,7 +25,6 @@ from .checks import (
     check_finite,
     check_int,
     check_mapping,
-    check_positive,
     read_input_text,
     readonly,
 )
@@ -246,7 +245,7 @@ def _parse_cameras(cfg: Any, room: Room) -> tuple:
         pos = check_array(f"{where}.position", pose["position"], (3,))
         if not room.contains_point(pos[:2]) or not 0 < pos[2] < room.height:
             raise ValueError(f"{where}.position: camera {pose['number']} at {pos.tolist()} is outside the room")
-        yaw = check_finite(f"{where}.yaw_deg", pose["yaw_deg"])
+        yaw = check_between(f"{where}.yaw_deg", pose["yaw_deg"], -360.0, 360.0, "degrees")
         pitch = check_finite(f"{where}.pitch_deg", pose["pitch_deg"])
         if not -90 < pitch < 90:
             raise ValueError(f"{where}.pitch_deg: expected a pitch in (-90, 90) degrees (down is positive), "
@@ -364,8 +363,9 @@ def _parse_render(cfg: Any) -> RenderSettings:
     check_mapping("render", cfg, ("backend", "noise_std", "gain_jitter"))
     return RenderSettings(
         backend=check_choice("render.backend", cfg.get("backend", "egl"), BACKENDS),
-        noise_std=check_positive("render.noise_std", cfg.get("noise_std", 2.0), allow_zero=True),
-        gain_jitter=check_positive("render.gain_jitter", cfg.get("gain_jitter", 0.02), allow_zero=True),
+        # noise beyond the 8-bit range, or a gain jitter beyond 100 %, leaves no picture to test
+        noise_std=check_between("render.noise_std", cfg.get("noise_std", 2.0), 0.0, 255.0, "grey levels"),
+        gain_jitter=check_between("render.gain_jitter", cfg.get("gain_jitter", 0.02), 0.0, 1.0, "(relative)"),
     )
 
 

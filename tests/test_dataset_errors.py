@@ -521,3 +521,14 @@ def test_dask_runs_keep_a_few_episodes_submitted_not_all(tmp_path, monkeypatch):
     done = gen.generate(config, 30, out, {}, client)
     assert sorted(done) == list(range(30)) and len(client.submitted) == 30
     assert client.most == 4 == gen.in_flight(client)         # two per worker thread, at least 4
+
+
+def test_params_that_cannot_give_a_picture_are_refused_before_any_work(tmp_path, capsys):
+    """Every scanline would be empty: refused in one line before DIR is made, not in the episode."""
+    params = tmp_path / "p.yaml"
+    params.write_text("column_threshold: 100000\n")
+    out = tmp_path / "data"
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", "--frames", "1", "--cameras", "1",
+                     "--params", str(params))
+    assert code == 2 and "--params: column_threshold 100000 exceeds the 552 pixels of a rectified column" in line
+    assert not out.exists()

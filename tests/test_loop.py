@@ -298,3 +298,18 @@ def load_scene_text():
     from scene import scene_path
 
     return scene_path("lab").read_text()
+
+
+@pytest.mark.parametrize("command", [["run", "lab"], ["study", "lab", "--workers", "0", "--frames", "2"]])
+def test_a_column_threshold_no_column_reaches_is_refused_before_the_walk(command, capsys, tmp_path, monkeypatch):
+    """Every scanline would be empty: run printed a hull of the whole room, frame after frame."""
+    import testbed.episode
+
+    def walk(*args, **kwargs):
+        raise AssertionError("walked before the parameters were checked")
+
+    monkeypatch.setattr(testbed.episode, "walk", walk)
+    (tmp_path / "p.yaml").write_text("column_threshold: 100000\n")
+    assert main([*command, "--params", str(tmp_path / "p.yaml")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--params: column_threshold 100000 exceeds the 552 pixels of a rectified column" in err[0]

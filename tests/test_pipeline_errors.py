@@ -40,6 +40,8 @@ def test_yaml_round_trip(tmp_path):
     ({"temporal_alpha": 0}, r"temporal_alpha: expected a number in \(0, 1\]"),
     ({"column_threshold": 0}, r"column_threshold: expected a finite number > 0"),
     ({"brightness_floor": "dark"}, r"brightness_floor: expected a number"),
+    # overflowed float32 with a RuntimeWarning; no RGB difference exceeds 255 sqrt 3
+    ({"dark_delta": 1e300}, r"dark_delta: expected a number in \[0, 442\], got 1e\+300"),
 ])
 def test_bad_parameters(changes, match):
     with pytest.raises(ValueError, match=match):

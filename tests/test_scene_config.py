@@ -356,3 +356,16 @@ def test_the_bounds_keep_the_built_in_scenes_and_their_edges():
     Scene.from_text(LAB.replace("frame_rate: 7.5", "frame_rate: 0.001"), "s.yaml")
     Scene.from_text(LAB.replace("width: 6.7056", "width: 100"), "s.yaml")
     Scene.from_text(CIRCLE.replace("count: 16", "count: 10000"), "s.yaml")
+
+
+@pytest.mark.parametrize("old, new, match", [
+    # a hull covering the whole room (residual 64.9): the frames were noise
+    ("noise_std: 2.0 ", "noise_std: 1e300 ", r"render.noise_std: expected a finite number >= 0 and at most 255"),
+    ("gain_jitter: 0.02 ", "gain_jitter: 5 ", r"render.gain_jitter: expected a finite number >= 0 and at most 1"),
+    # cos and sin of 1e300 degrees point nowhere in particular
+    ("yaw_deg: 70.5", "yaw_deg: 1e300", r"yaw_deg: expected a finite number >= -360 and at most 360 degrees"),
+])
+def test_render_settings_and_yaw_beyond_any_meaning_are_refused(old, new, match):
+    assert old in LAB
+    with pytest.raises(ValueError, match=match):
+        Scene.from_text(LAB.replace(old, new, 1), "s.yaml")

@@ -65,6 +65,7 @@ def check_positive(name: str, value: int) -> int:
 def build_config(args: argparse.Namespace):
     """Validate the arguments (no rendering); return the :class:`EpisodeConfig` and its scene."""
     from pipeline.params import load_params
+    from pipeline.rectify import check_column_threshold
     from render.renderer import check_camera_numbers
     from testbed.cli import check_seed
     from testbed.episode import check_renderable
@@ -86,6 +87,8 @@ def build_config(args: argparse.Namespace):
     scene = load_episode_scene(config)
     check_renderable(scene, "scene")
     check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])
+    check_column_threshold(config.params["column_threshold"], [c for c in scene.cameras if config.cameras is None
+                                                               or c.number in config.cameras], "--params")
     silhouette_dtype(scene.people.count, "--people" if args.people is not None else "people.count")
     if args.format == "video":
         from testbed.lossless import check_frame_rate

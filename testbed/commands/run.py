@@ -43,6 +43,7 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
 def prepare(args):
     """Validate the arguments and draw the walk: (scene, config, params, truth, sensor rng)."""
     from pipeline import load_params
+    from pipeline.rectify import check_column_threshold
     from scene import load_scene
     from testbed.cli import check_seed
     from testbed.episode import check_people_renderable, check_renderable, walk, with_people
@@ -63,6 +64,7 @@ def prepare(args):
     config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback, args.near_field).check(
         len(scene.cameras), as_options=True)
     params = load_params(args.params)
+    check_column_threshold(params.column_threshold, scene.cameras, "--params")
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
     return scene, config, params, walk(scene, args.frames, motion_rng), sensor_rng
 

@@ -35,6 +35,8 @@ def add_arguments(p) -> None:
 
 
 def parse(args) -> dict:
+    from pipeline import load_params
+    from pipeline.rectify import check_column_threshold
     from scene import load_scene
     from testbed.episode import check_people_renderable, check_renderable, with_people
 
@@ -52,6 +54,7 @@ def parse(args) -> dict:
             raise ValueError(f"--{name.replace('_', '-')}: expected an integer >= 1, got {getattr(args, name)}")
     if args.m > min(ks):
         raise ValueError(f"--m: expected at most the smallest k = {min(ks)}, got {args.m}")
+    check_column_threshold(load_params(args.params).column_threshold, scene.cameras, "--params")
     return {"scene": args.scene, "people": args.people, "k": ks, "taskers": taskers,
             "frames": args.frames, "m": args.m, "update_every": args.update_every, "params": args.params,
             "near_field": args.near_field}
