@@ -8,6 +8,7 @@ them could not be read by the other users of a shared machine or cluster.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
 from collections.abc import Iterable
@@ -26,6 +27,10 @@ def _create(parent: Path, prefix: str, suffix: str, make):
             return path, make(path)
         except FileExistsError:
             continue
+        except BaseException:               # e.g. Ctrl-C once it existed, before the caller had it
+            with contextlib.suppress(OSError):
+                path.rmdir() if path.is_dir() else path.unlink(missing_ok=True)
+            raise
     raise FileExistsError(f"no unused temporary name {prefix}*{suffix} in {parent}")
 
 

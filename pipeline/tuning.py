@@ -75,7 +75,9 @@ def tune(cameras, background, frames, gt_scanlines, n_trials: int, seed: int = 0
     if n_trials < 1:
         raise ValueError(f"trials: expected an integer >= 1, got {n_trials}")
     start = PipelineParams() if start is None else start
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    # not WARNING: Optuna logs a trial that raised with its traceback ("Trial 12 failed ..."),
+    # a page on every Ctrl-C; the error itself is re-raised here either way
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
     base = Pipeline(cameras, start, background)   # maps and background serve every trial
     study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
     with warnings.catch_warnings():        # a start outside SPACE: see outside_space

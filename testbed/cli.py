@@ -72,6 +72,19 @@ def _terminate(signum, frame) -> None:
     raise Terminated
 
 
+def _interruption(exc: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM behind ``exc``, if any: a signal that lands while numba's
+    dispatcher calls back into Python (to unpickle a constant) comes out as ``SystemError:
+    CPUDispatcher(...) returned a result with an exception set``, caused by it."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
 def _stdout_closed() -> bool:
     """Whether standard output is a pipe whose reader has gone."""
     try:
@@ -110,6 +123,13 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, RunError, BackendError) as exc:    # the machine, not the input: a full disk, no OpenGL
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 1
+    except SystemError as exc:
+        stop = _interruption(exc)
+        if stop is None:
+            raise
+        print(f"camtask {args.command}: {'terminated' if isinstance(stop, Terminated) else 'interrupted'}",
+              file=sys.stderr)
+        return 128 + signal.SIGTERM if isinstance(stop, Terminated) else 130
     except MemoryError as exc:              # NumPy's says how much it asked for ("Unable to allocate 45 GiB ...")
         print(f"camtask {args.command}: error: out of memory ({exc or 'no details'})", file=sys.stderr)
         return 1

@@ -322,7 +322,10 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     existing = [p for p in out.iterdir() if p.name != LOCK]     # the lock: this run's own
     keep: dict[int, dict] = {}
     if overwrite:
-        for p in existing:
+        # the manifest last: deleting a large dataset takes a while, and a run stopped meanwhile
+        # (Ctrl-C on seeing the wrong --out) left episodes without it, a folder that --overwrite
+        # and --resume then refused as not a dataset; with it, --overwrite empties it again
+        for p in sorted(existing, key=lambda p: p.name == MANIFEST):
             shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
     elif resume and existing:
         old = read_manifest(out)

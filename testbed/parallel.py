@@ -22,6 +22,7 @@ import logging
 import os
 import signal
 import sys
+import threading
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
@@ -48,6 +49,34 @@ def dask_setup(worker) -> None:
     each worker process printed its own KeyboardInterrupt traceback on the way out.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextlib.contextmanager
+def children_ignore_ctrl_c() -> Iterator[None]:
+    """Block SIGINT in this thread while the local cluster starts.
+
+    The threads Dask starts meanwhile (its event loop, each nanny's process watcher) inherit
+    the mask, and so do the worker processes they spawn (a signal mask survives fork and
+    exec): a Ctrl-C that reaches the terminal's process group while a worker still imports
+    numpy or distributed stays pending there, never delivered, instead of printing its
+    KeyboardInterrupt traceback before :func:`dask_setup` ignores SIGINT. Workers the nanny
+    restarts later start from the same threads. This thread gets SIGINT back on the way out
+    (a Ctrl-C that came meanwhile is delivered then, to the handler in place).
+    """
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    from multiprocessing import resource_tracker
+
+    # started first: multiprocessing starts it with SIGINT and SIGTERM blocked, then unblocks
+    # both in the starting thread, whatever they were (Dask's event loop would lose the mask)
+    resource_tracker.ensure_running()
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        if signal.SIGINT not in before:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def default_workers() -> int:
@@ -121,9 +150,10 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
     try:
         # Ctrl-C and SIGTERM wait until the cluster has started, then stop the run as usual:
         # half-started, it printed tracebacks (a nanny that failed to start, an atexit
-        # assertion). A worker still importing when a Ctrl-C reaches the terminal's process
-        # group (before dask_setup ignores SIGINT) can still print its own.
-        with signals_held():
+        # assertion). The worker processes start with SIGINT blocked (children_ignore_ctrl_c):
+        # one still importing when a Ctrl-C reached the terminal's process group printed a
+        # page of KeyboardInterrupt traceback (1-5 s after the start on a busy machine).
+        with signals_held(), children_ignore_ctrl_c():
             with warnings.catch_warnings(), dask.config.set({"distributed.nanny.pre-spawn-environ": spawn_env}):
                 warnings.simplefilter("ignore", UserWarning)  # "port 8787 in use" when several clusters run
                 cluster = LocalCluster(
@@ -133,10 +163,14 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
             client = Client(cluster)
         yield client
     finally:
-        if client is not None:
-            client.close()
-        if cluster is not None:
-            cluster.close()
+        # a second Ctrl-C (or SIGTERM) while the cluster closes waits until it has closed:
+        # interrupted, the close was left to Dask's atexit hook (~10 s more), and a worker
+        # could still rename an episode into DIR after the caller had removed the unlisted ones
+        with signals_held():
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
 
 
 class _BadAddress(Exception):

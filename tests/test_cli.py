@@ -85,3 +85,39 @@ def test_a_reader_that_stops_reading_ends_the_command_quietly(monkeypatch, capsy
     monkeypatch.setattr(sys, "stdout", Closed())
     assert cli.main(["study", "cameras"]) == 128 + signal.SIGPIPE
     assert capsys.readouterr().err == ""
+
+
+def test_ctrl_c_that_numba_turned_into_a_system_error_is_one_line(monkeypatch, capsys):
+    """Ctrl-C while numba's dispatcher called back into Python (to unpickle a constant, as in
+    the pipeline's angle_mask) came out as "SystemError: CPUDispatcher(...) returned a result
+    with an exception set" after two tracebacks, exit code 1."""
+    import pytest
+
+    from testbed.commands import verify
+
+    def numba_interrupted(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("CPUDispatcher(<function angle_mask>) returned a result with an exception set") from exc
+
+    monkeypatch.setattr(verify, "run", numba_interrupted)
+    assert cli.main(["verify", "x"]) == 130
+    assert capsys.readouterr().err == "camtask verify: interrupted\n"
+
+    def terminated(args):
+        try:
+            raise cli.Terminated
+        except KeyboardInterrupt as exc:
+            raise SystemError("returned a result with an exception set") from exc
+
+    monkeypatch.setattr(verify, "run", terminated)
+    assert cli.main(["verify", "x"]) == 143
+    assert capsys.readouterr().err == "camtask verify: terminated\n"
+
+    def broken(args):
+        raise SystemError("a real bug")
+
+    monkeypatch.setattr(verify, "run", broken)
+    with pytest.raises(SystemError, match="a real bug"):
+        cli.main(["verify", "x"])

@@ -532,3 +532,41 @@ def test_params_that_cannot_give_a_picture_are_refused_before_any_work(tmp_path,
                      "--params", str(params))
     assert code == 2 and "--params: column_threshold 100000 exceeds the 552 pixels of a rectified column" in line
     assert not out.exists()
+
+
+def test_overwrite_stopped_while_it_deletes_can_be_overwritten_again(tmp_path, capsys, monkeypatch):
+    """Ctrl-C while --overwrite deleted a large dataset (it takes a while) could leave episodes
+    without their manifest.json: --overwrite and --resume then refused the folder as not a
+    dataset. The manifest goes last."""
+    import json
+    import shutil
+
+    from testbed import generate
+
+    out = tmp_path / "data"
+    out.mkdir()
+    names = [f"episode_{i:04d}" for i in range(6)]
+    for name in names:
+        (out / name).mkdir()
+        (out / name / "meta.json").write_text("{}")
+    (out / "manifest.json").write_text(json.dumps({"episodes": [], "episodes_planned": 6}))
+    removed = []
+    real_rmtree = shutil.rmtree
+
+    def rmtree(path, *args, **kwargs):
+        real_rmtree(path, *args, **kwargs)
+        removed.append(os.path.basename(path))
+        if len(removed) == 2:
+            raise KeyboardInterrupt                  # Ctrl-C halfway through
+
+    monkeypatch.setattr(generate.shutil, "rmtree", rmtree)
+    listing = generate.Path.iterdir                  # a folder's order is the file system's: manifest first
+    monkeypatch.setattr(generate.Path, "iterdir",
+                        lambda self: iter(sorted(listing(self), key=lambda p: p.name != "manifest.json")))
+    assert main(["render", "lab", "--out", str(out), "--workers", "0", "--overwrite", "--frames", "1"]) == 130
+    monkeypatch.setattr(generate.shutil, "rmtree", real_rmtree)
+    assert (out / "manifest.json").is_file()
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", "--overwrite", "--frames", "1",
+                     "--cameras", "2")
+    assert code == 0, line
+    assert sorted(p.name for p in out.iterdir()) == ["episode_0000", "manifest.json", "run_info.json"]

@@ -243,3 +243,61 @@ def test_undistorted_boxes_of_several_people_bound_their_own_undistorted_pixels(
             assert np.abs(got - want).max() <= 2.0, (n, a["personID"], got, want)
             checked += 1
     assert checked >= 3
+
+
+@pytest.mark.render
+def test_ctrl_c_stops_the_export_at_the_next_frame(tmp_path, monkeypatch):
+    """Ctrl-C during an export waited until every camera being exported had written all its
+    frames (a thread pool's shutdown): ~9 s for 300 frames. It stops at the next frame."""
+    import signal
+    import threading
+
+    from testbed import wildtrack
+
+    data, out = tmp_path / "data", tmp_path / "wild"
+    assert main(["render", "lab", "--frames", "12", "--seed", "9", "--cameras", "1,6", "--out", str(data),
+                 "--workers", "0"]) == 0
+    monkeypatch.setattr("testbed.parallel.default_workers", lambda: 2)
+    written = []
+    lock = threading.Lock()
+
+    def progress(n):
+        with lock:
+            written.append(n)
+            if len(written) == 1:
+                os.kill(os.getpid(), signal.SIGINT)      # Ctrl-C after the first image
+        threading.Event().wait(0.05)                     # a frame takes a while
+
+    with pytest.raises(KeyboardInterrupt):
+        wildtrack.export_episode(data / "episode_0000", out, "wildtrack", undistort=True, progress=progress)
+    assert len(written) <= 4, len(written)               # not 2 cameras x 12 frames
+    assert not out.exists() and not list(tmp_path.glob(".wild*"))
+
+
+@pytest.mark.render
+def test_ctrl_c_while_an_earlier_export_is_replaced_keeps_a_whole_one(tmp_path, monkeypatch, capsys):
+    """--overwrite deleted the earlier export, then renamed the new one into place: Ctrl-C while
+    it deleted left part of the old one without its grid.json, which --overwrite then refused."""
+    import shutil
+
+    from testbed import wildtrack
+
+    data, out = tmp_path / "data", tmp_path / "wild"
+    assert main(["render", "lab", "--frames", "2", "--seed", "9", "--cameras", "1,6", "--out", str(data),
+                 "--workers", "0"]) == 0
+    assert main(["export", "wildtrack", str(data), str(out)]) == 0
+    real, calls = shutil.rmtree, []
+
+    def interrupted(path, *a, **k):              # deletes grid.json first, then Ctrl-C
+        calls.append(path)
+        if len(calls) == 1 and os.path.isfile(os.path.join(path, "grid.json")):
+            os.unlink(os.path.join(path, "grid.json"))
+            raise KeyboardInterrupt
+        return real(path, *a, **k)
+
+    monkeypatch.setattr(wildtrack.shutil, "rmtree", interrupted)
+    assert main(["export", "wildtrack", str(data), str(out), "--overwrite", "--undistort"]) == 130
+    monkeypatch.undo()
+    assert (out / "grid.json").is_file()         # a whole export, the old or the new one
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["data", "wild"]
+    assert main(["export", "wildtrack", str(data), str(out), "--overwrite"]) == 0

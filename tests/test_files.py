@@ -46,3 +46,20 @@ def test_temp_folder_gives_up_with_a_clear_error(tmp_path, monkeypatch):
     temp_folder(tmp_path, "x.")
     with pytest.raises(FileExistsError, match=r"no unused temporary name x\.\*\.tmp in"):
         temp_folder(tmp_path, "x.")
+
+
+def test_ctrl_c_just_after_the_temporary_file_is_made_leaves_none(tmp_path, monkeypatch):
+    """A signal landing after os.open made the temporary file, before write_atomic held its
+    name, left a .manifest.json.<random>.tmp behind, in which --overwrite then saw a folder
+    that is not a dataset."""
+    real = os.open
+
+    def open_then_interrupted(*args, **kwargs):
+        real(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "open", open_then_interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        write_atomic(tmp_path / "manifest.json", b"{}")
+    monkeypatch.undo()
+    assert list(tmp_path.iterdir()) == []

@@ -313,3 +313,25 @@ def test_a_column_threshold_no_column_reaches_is_refused_before_the_walk(command
     assert main([*command, "--params", str(tmp_path / "p.yaml")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--params: column_threshold 100000 exceeds the 552 pixels of a rectified column" in err[0]
+
+
+@pytest.mark.render
+def test_demo_stopped_after_its_video_keeps_the_earlier_demo_whole(tmp_path, monkeypatch):
+    """Ctrl-C while the demo drew its top view (after the video was finished) left a new
+    run.mp4 beside the summary.json and topview.png of the earlier demo (another seed)."""
+    from testbed import topview
+
+    out = tmp_path / "demo"
+    assert main(["demo", "--out", str(out), "--frames", "2", "--seed", "1"]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    real, calls = topview.TopView.draw, []
+
+    def interrupted(self, *a, **k):            # the video's two frames drawn, then Ctrl-C
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(self, *a, **k)
+    monkeypatch.setattr(topview.TopView, "draw", interrupted)
+    assert main(["demo", "--out", str(out), "--frames", "2", "--seed", "2"]) == 130
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before     # no new video, no staged file

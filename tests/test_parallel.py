@@ -1,5 +1,6 @@
 """The local Dask cluster's workers: environment."""
 
+import contextlib
 import os
 import shutil
 
@@ -126,3 +127,85 @@ def test_a_tls_scheduler_set_up_in_the_dask_config_passes_the_check(tmp_path):
     with dask.config.set(tls), LocalCluster(n_workers=0, processes=False, protocol="tls", dashboard_address=None,
                                             security=Security()) as cluster:
         check_scheduler(cluster.scheduler_address, 5.0)
+
+
+def _sigint_blocked():
+    import signal
+
+    return signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+
+def test_local_workers_start_with_ctrl_c_blocked():
+    """A worker still importing (numpy, distributed: a second or more on a busy machine)
+    when Ctrl-C reached the process group printed a page of KeyboardInterrupt traceback:
+    dask_setup ignores SIGINT only once the imports are done. The workers start with it
+    blocked (inherited from the threads that spawn them); this process gets it back."""
+    import signal
+
+    with open_client(2) as client:
+        assert list(client.run(_sigint_blocked).values()) == [True, True]
+        assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+
+def test_ctrl_c_while_the_workers_import_prints_one_line(tmp_path):
+    """End to end: Ctrl-C to the whole process group as soon as the worker processes exist."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import psutil
+
+    args = [sys.executable, "-m", "testbed.cli", "study", "cameras", "--objects", "1", "--cameras", "4",
+            "--trials", "5", "--workers", "2", "--no-progress"]
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    me = psutil.Process(proc.pid)
+
+    def importing():
+        # a worker process that has started Python and is importing (before that, SIGINT just
+        # ends it): one whose resident memory has grown past a bare interpreter's
+        with contextlib.suppress(psutil.Error):
+            return any("spawn_main" in " ".join(c.cmdline()) and c.memory_info().rss > 40e6
+                       for c in me.children(recursive=True))
+        return False
+
+    deadline = time.time() + 60
+    while proc.poll() is None and not importing() and time.time() < deadline:
+        time.sleep(0.002)
+    os.killpg(proc.pid, signal.SIGINT)
+    err = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert err.strip() == "camtask study: interrupted"
+
+
+def test_ctrl_c_while_the_local_cluster_closes_lets_it_close(monkeypatch):
+    """A second Ctrl-C (the first one's close takes seconds) interrupted client.close(): the
+    cluster was left to Dask's atexit hook (~10 s more), and its workers could still rename a
+    finished episode into DIR after the render had removed the unlisted ones."""
+    import signal
+
+    import distributed
+
+    events = []
+
+    class Cluster:
+        def __init__(self, **kwargs):
+            events.append("started")
+
+        def close(self):
+            events.append("cluster closed")
+
+    class Client:
+        def __init__(self, cluster):
+            pass
+
+        def close(self):
+            os.kill(os.getpid(), signal.SIGINT)         # the second Ctrl-C
+            events.append("client closed")
+
+    monkeypatch.setattr(distributed, "LocalCluster", Cluster)
+    monkeypatch.setattr(distributed, "Client", Client)
+    with pytest.raises(KeyboardInterrupt), open_client(2):
+        raise KeyboardInterrupt                          # the first one
+    assert events == ["started", "client closed", "cluster closed"]

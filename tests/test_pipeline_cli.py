@@ -184,3 +184,26 @@ def test_scanlines_records_the_blind_radii_of_the_shortest_person(render_dir, tm
             near, far = pipe.sight_range(1.6, truth=truth, object_width=0.5)
             np.testing.assert_array_equal(z[f"{prefix}blind_radius"], near)
             np.testing.assert_array_equal(z[f"{prefix}sight_radius"], far)
+
+
+def test_ctrl_c_during_tune_is_one_line(tmp_path, render_dir, monkeypatch, capsys):
+    """Optuna logged the interrupted trial with its traceback ("Trial 3 failed ...") before
+    camtask's "interrupted" line: a page for every Ctrl-C."""
+    from pipeline import tuning
+    from testbed.cli import main
+
+    real, calls = tuning.scanline_f1, []
+
+    def interrupted(*a, **k):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(tuning, "scanline_f1", interrupted)
+    capsys.readouterr()
+    assert main(["tune", str(render_dir), "--trials", "5", "--out", str(tmp_path / "p.yaml")]) == 130
+    err = capsys.readouterr().err
+    lines = [x for x in err.replace("\r", "\n").splitlines() if x.strip() and not x.startswith("tune:")]
+    assert lines == ["camtask tune: interrupted"], err
+    assert not (tmp_path / "p.yaml").exists()

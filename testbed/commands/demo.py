@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -24,6 +25,7 @@ def run(args: argparse.Namespace) -> int:
     import cv2
 
     from pipeline.files import write_atomic
+    from render.gl import signals_held
     from testbed.commands.run import execute, format_summary, prepare
     from testbed.topview import TopView
 
@@ -33,15 +35,25 @@ def run(args: argparse.Namespace) -> int:
     scene, config, params, truth, rng = prepare(ns)     # checks the arguments
     out = check_out_folder(args.out)
     t0 = time.perf_counter()
-    results, summary, bearings = execute(scene, config, params, truth, rng, out / "run.mp4")
-    summary["seed"] = args.seed             # no wall-clock time: same seed, same bytes
-    seconds = round(time.perf_counter() - t0, 1)
-    doc = {"summary": summary, "frames": [r.to_json() for r in results]}
-    write_atomic(out / "summary.json", json.dumps(doc, indent=1, allow_nan=False).encode())
-    view = TopView(scene, width=720)
-    for r in results:                      # draw every frame so the tracks have their tails
-        top = view.draw(r, bearings)
-    write_atomic(out / "topview.png", cv2.imencode(".png", top[..., ::-1])[1].tobytes())
+    # the video is finished under a name of this run's own and renamed with the other two
+    # files at the end: stopped after the video, the run left a new run.mp4 beside the
+    # summary.json and topview.png of an earlier demo (another --seed), as if one run's
+    staged = out / f".run.staged-{os.getpid()}.mp4"
+    try:
+        results, summary, bearings = execute(scene, config, params, truth, rng, staged)
+        summary["seed"] = args.seed         # no wall-clock time: same seed, same bytes
+        seconds = round(time.perf_counter() - t0, 1)
+        doc = {"summary": summary, "frames": [r.to_json() for r in results]}
+        view = TopView(scene, width=720)
+        for r in results:                   # draw every frame so the tracks have their tails
+            top = view.draw(r, bearings)
+        png = cv2.imencode(".png", top[..., ::-1])[1].tobytes()
+        with signals_held():                # the three files change together
+            write_atomic(out / "summary.json", json.dumps(doc, indent=1, allow_nan=False).encode())
+            write_atomic(out / "topview.png", png)
+            os.replace(staged, out / "run.mp4")
+    finally:
+        staged.unlink(missing_ok=True)
     print(format_summary(summary))
     print(f"\nwrote {out / 'run.mp4'}, {out / 'summary.json'}, {out / 'topview.png'} "
           f"({seconds} s)", file=sys.stderr)
