@@ -116,37 +116,46 @@ def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[n
     A file ffmpeg cannot open, a slice whose CRC fails, a truncated file (and, given
     ``frames``, another number of frames) is a one-line ValueError naming the file, raised
     once the frames before it are yielded.
-    """
-    import imageio_ffmpeg
 
+    One ffmpeg decodes the file to PPM images (a header ``P6\\n<w> <h>\\n255\\n``, then the
+    RGB bytes): each frame says its own size, so the file is not opened a second time to
+    read it (that cost as much as decoding a few frames).
+    """
     path = check_input_file("video", path)
-    header = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")     # the size, from ffmpeg's header
-    try:
-        w, h = next(header)["size"]
-    except (OSError, RuntimeError, KeyError):
-        raise ValueError(f"video: cannot read {str(path)!r} (not a video ffmpeg can open)") from None
-    finally:
-        header.close()
-    size = w * h * 3
     log = tempfile.TemporaryFile()  # noqa: SIM115 (closed in finally)
     proc = subprocess.Popen([_ffmpeg(), "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
-                             "-f", "rawvideo", "-pix_fmt", "rgb24", "-"],
+                             "-f", "image2pipe", "-c:v", "ppm", "-pix_fmt", "rgb24", "-"],
                             stdout=subprocess.PIPE, stderr=log, start_new_session=True)
-    n = 0
+    n, short = 0, False
     try:
         while True:
-            raw = proc.stdout.read(size)
-            if not raw:
+            head = proc.stdout.readline()
+            if not head:
                 break
-            if len(raw) < size:
-                raise ValueError(f"video: {str(path)!r}: frame {n} ends early")
+            head += proc.stdout.readline() + proc.stdout.readline()
+            magic, size, depth = (head.split(b"\n") + [b"", b""])[:3]
+            try:
+                w, h = map(int, size.split())
+            except ValueError:
+                w = h = 0
+            raw = proc.stdout.read(w * h * 3) if (magic, depth) == (b"P6", b"255") and w > 0 and h > 0 else b""
+            if not raw or len(raw) < w * h * 3:
+                short = True                    # ffmpeg's message, when it failed, says more
+                break
             yield np.frombuffer(raw, np.uint8).reshape(h, w, 3)
             n += 1
+        if short:
+            proc.stdout.read()                  # at its end already (a short read is the end of output)
         code = proc.wait()
         log.seek(0)
         if code != 0 or log.read().strip():
+            if n == 0:
+                raise ValueError(f"video: cannot read {str(path)!r}: {_last_line(log)} "
+                                 "(not a video ffmpeg can open, or corrupt)")
             raise ValueError(f"video: cannot read {str(path)!r} after {n} frames: {_last_line(log)} "
                              "(truncated or corrupt)")
+        if short:
+            raise ValueError(f"video: {str(path)!r}: frame {n} ends early")
         if frames is not None and n != frames:
             raise ValueError(f"video: {str(path)!r} holds {n} frames; expected {frames}")
     finally:

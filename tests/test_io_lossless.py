@@ -1,0 +1,80 @@
+"""testbed.lossless.read_video: one ffmpeg per video, frames and errors as before."""
+
+import subprocess
+
+import numpy as np
+import pytest
+
+from testbed.lossless import VideoWriter, read_video
+
+
+def write(path, frames, fps=7.5):
+    w = VideoWriter(path, frames[0].shape[1], frames[0].shape[0], fps)
+    for f in frames:
+        w.write(f)
+    w.close()
+    return path
+
+
+def clip(n, h=30, w=41, seed=1):
+    rng = np.random.default_rng(seed)
+    return [rng.integers(0, 256, (h, w, 3), dtype=np.uint8) for _ in range(n)]
+
+
+def test_one_ffmpeg_per_video(tmp_path, monkeypatch):
+    """Opening the file once to read its size and again to decode it cost as much as the decoding."""
+    frames = clip(3)
+    path = write(tmp_path / "v.mkv", frames)
+    spawned = []
+    real = subprocess.Popen
+
+    def popen(cmd, *args, **kwargs):
+        spawned.append(cmd)
+        return real(cmd, *args, **kwargs)
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
+    back = list(read_video(path, 3))
+    assert len(spawned) == 1
+    assert len(back) == 3
+    for a, b in zip(frames, back, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_odd_sizes_and_one_frame_round_trip(tmp_path):
+    for h, w in ((7, 3), (3, 7), (2, 2)):
+        frames = clip(1, h, w)
+        back = list(read_video(write(tmp_path / f"v{h}x{w}.mkv", frames), 1))
+        assert len(back) == 1 and back[0].shape == (h, w, 3)
+        np.testing.assert_array_equal(frames[0], back[0])
+
+
+def test_another_frame_count_is_refused_after_the_frames(tmp_path):
+    path = write(tmp_path / "v.mkv", clip(2))
+    got = []
+    with pytest.raises(ValueError, match=r"v.mkv' holds 2 frames; expected 3$"):
+        got.extend(read_video(path, 3))
+    assert len(got) == 2
+
+
+def test_not_a_video_names_the_file_and_ffmpeg_s_reason(tmp_path):
+    bad = tmp_path / "junk.mkv"
+    bad.write_bytes(b"\x00" * 5000)
+    with pytest.raises(ValueError, match=r"^video: cannot read .*junk.mkv'.*Invalid data") as err:
+        list(read_video(bad))
+    assert "\n" not in str(err.value)
+
+
+def test_a_closed_reader_stops_its_ffmpeg(tmp_path, monkeypatch):
+    path = write(tmp_path / "v.mkv", clip(5, 64, 64))
+    procs = []
+    real = subprocess.Popen
+
+    def popen(cmd, *args, **kwargs):
+        procs.append(real(cmd, *args, **kwargs))
+        return procs[-1]
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
+    gen = read_video(path, 5)
+    next(gen)
+    gen.close()
+    assert procs and all(p.poll() is not None for p in procs)
