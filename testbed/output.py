@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 from pipeline.files import write_atomic
@@ -44,18 +45,52 @@ def check_output_file(option: str, path: str | os.PathLike, suffix: str | None =
     check_outside_episodes(option, p)
     if p.parent.exists() and not p.parent.is_dir():
         raise ValueError(f"{option}: cannot write to {p.parent} (not a folder)")
-    missing = [f for f in (p.parent, *p.parent.parents) if not f.exists()]   # deepest first
+    with made_folder(option, p.parent, keep=False):
+        check_writable(option, p.parent)
+    return p
+
+
+def _exists(path: Path) -> bool:
+    """Whether ``path`` exists; a path that cannot be looked at (no permission) counts as
+    existing: it is not one of ours to remove."""
+    try:
+        return path.exists()
+    except OSError:
+        return True
+
+
+@contextlib.contextmanager
+def made_folder(option: str, folder: str | os.PathLike, keep: bool = True) -> Iterator[Path]:
+    """Make ``folder`` and the folders above it that are missing, for the ``with`` block.
+
+    A folder that cannot be made is a one-line ValueError naming ``option``. The folders
+    made here are removed again, deepest first and only while empty, when the block fails
+    (any exception, Ctrl-C included) or, without ``keep``, when it ends: a command that
+    stops leaves no empty folders behind.
+
+    >>> import tempfile
+    >>> top = Path(tempfile.mkdtemp())
+    >>> with made_folder("OUT", top / "a" / "b", keep=False) as f:
+    ...     f.is_dir()
+    True
+    >>> os.listdir(top)
+    []
+    """
+    folder = Path(folder)
+    made = [f for f in (folder, *folder.parents) if not _exists(f)]      # deepest first
+    done = False
     try:
         try:
-            p.parent.mkdir(parents=True, exist_ok=True)
+            folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise ValueError(f"{option}: cannot make the folder {p.parent} ({exc.strerror or exc})") from None
-        check_writable(option, p.parent)
+            raise ValueError(f"{option}: cannot make the folder {folder} ({exc.strerror or exc})") from None
+        yield folder
+        done = keep
     finally:
-        for folder in missing:
-            with contextlib.suppress(OSError):
-                folder.rmdir()
-    return p
+        if not done:
+            for f in made:
+                with contextlib.suppress(OSError):      # not empty: something else is in it now
+                    f.rmdir()
 
 
 #: Prefix of the files :func:`check_writable` (and the dataset writer) create and remove

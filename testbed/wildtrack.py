@@ -39,7 +39,6 @@ the label masks for the boxes by nearest neighbour), and the coefficients writte
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
@@ -55,6 +54,7 @@ import numpy as np
 
 from pipeline.files import temp_folder
 from testbed.dataset import read_people
+from testbed.output import made_folder
 from testbed.png import write_png
 
 #: Side of a ground-grid cell, metres (WILDTRACK: 2.5 cm).
@@ -195,82 +195,75 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
     origin, gw, gh = ground_grid(room.polygon.bounds)
     P = int(meta["people"])
     table = people_table(episode / "people.csv", frames, P) if people is None else people
-    made = [f for f in out.parents if not f.exists()]            # deepest first
     tmp = aside = None
-    try:
+    with made_folder("OUT", out.parent):        # removed again when the export fails
         try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise ValueError(f"OUT: cannot make the folder {out.parent} ({exc.strerror or exc})") from None
-        tmp = temp_folder(out.parent, f".{out.name}.")
-        calibrations = tmp / "calibrations"
-        for sub in ("annotations_positions", f"calibrations/{lay.intrinsic}", "calibrations/extrinsic"):
-            (tmp / sub).mkdir(parents=True)
-        maps = {}                              # camera number -> undistortion maps (undistort only)
-        for n in numbers:
-            (tmp / "Image_subsets" / f"C{n}").mkdir(parents=True)
-            c = read_calibration(episode / "calibration" / f"cam{n:02d}.yaml")
-            dist = c["dist"].reshape(1, 5)
-            if undistort:
-                maps[n] = undistort_maps(c["K"], c["dist"], (c["width"], c["height"]))
-                dist = np.zeros_like(dist)
-            stem = lay.camera.format(n=n)
-            _write_fs(calibrations / lay.intrinsic / f"intr_{stem}.xml", camera_matrix=c["K"],
-                      distortion_coefficients=dist)
-            _write_extrinsic(calibrations / "extrinsic" / f"extr_{stem}.xml", c["rvec"], c["tvec"],
-                             lay.extrinsic_matrices)
-        # Ctrl-C stops the cameras being exported at their next frame: the pool's shutdown
-        # otherwise waited for each running camera's every frame (~9 s for 300 frames)
-        stop = threading.Event()
-        with ThreadPoolExecutor(max_workers=min(default_workers(), len(numbers))) as pool:
-            try:
-                b = np.stack(list(pool.map(
-                    lambda n: _export_camera(episode, meta, n, P, tmp / "Image_subsets" / f"C{n}", maps.get(n),
-                                             lay.image_digits, box, progress, stop),
-                    numbers)), axis=1)                                 # (frames, n_cams, P, 4)
-            except BaseException:
-                stop.set()
-                raise
-        for f in range(frames):
-            rows = table[table["frame"] == f]
-            pids = position_id(np.column_stack([rows["x"], rows["y"]]).astype(float), gw, origin)
-            ann = [{"personID": int(i), "positionID": int(pid),
-                    "views": [{"viewNum": v, "xmin": int(b[f, v, i, 0]), "ymin": int(b[f, v, i, 1]),
-                               "xmax": int(b[f, v, i, 2]), "ymax": int(b[f, v, i, 3])} for v in range(len(numbers))]}
-                   for i, pid in zip(rows["person_id"], pids, strict=True)]
-            (tmp / "annotations_positions" / f"{f:0{lay.annotation_digits}d}.json").write_text(json.dumps(ann))
-        (tmp / "grid.json").write_text(json.dumps({
-            "layout": layout, "cell_m": CELL, "origin_m": list(origin), "grid_width": gw, "grid_height": gh,
-            "position_id": "x_index + grid_width * y_index, x_index = floor((x - origin_m[0]) / cell_m), "
-                           "y_index = floor((y - origin_m[1]) / cell_m)",
-            "views": {str(v): n for v, n in enumerate(numbers)}, "units": "metres, world frame",
-            "undistorted": bool(undistort), "boxes": box, "source": str(episode)}, indent=1) + "\n")
-        # the earlier export is moved aside whole and deleted once the new one is in place:
-        # deleted first, a Ctrl-C meanwhile left part of it without its grid.json (refused by
-        # --overwrite) and neither export
-        with signals_held():
-            if out.exists():
-                aside = temp_folder(out.parent, f".{out.name}.replaced-")
-                os.replace(out, aside)
+            tmp = temp_folder(out.parent, f".{out.name}.")
+            calibrations = tmp / "calibrations"
+            for sub in ("annotations_positions", f"calibrations/{lay.intrinsic}", "calibrations/extrinsic"):
+                (tmp / sub).mkdir(parents=True)
+            maps = {}                              # camera number -> undistortion maps (undistort only)
+            for n in numbers:
+                (tmp / "Image_subsets" / f"C{n}").mkdir(parents=True)
+                c = read_calibration(episode / "calibration" / f"cam{n:02d}.yaml")
+                dist = c["dist"].reshape(1, 5)
+                if undistort:
+                    maps[n] = undistort_maps(c["K"], c["dist"], (c["width"], c["height"]))
+                    dist = np.zeros_like(dist)
+                stem = lay.camera.format(n=n)
+                _write_fs(calibrations / lay.intrinsic / f"intr_{stem}.xml", camera_matrix=c["K"],
+                          distortion_coefficients=dist)
+                _write_extrinsic(calibrations / "extrinsic" / f"extr_{stem}.xml", c["rvec"], c["tvec"],
+                                 lay.extrinsic_matrices)
+            # Ctrl-C stops the cameras being exported at their next frame: the pool's shutdown
+            # otherwise waited for each running camera's every frame (~9 s for 300 frames)
+            stop = threading.Event()
+            with ThreadPoolExecutor(max_workers=min(default_workers(), len(numbers))) as pool:
                 try:
-                    os.rename(tmp, out)
+                    b = np.stack(list(pool.map(
+                        lambda n: _export_camera(episode, meta, n, P, tmp / "Image_subsets" / f"C{n}", maps.get(n),
+                                                 lay.image_digits, box, progress, stop),
+                        numbers)), axis=1)                                 # (frames, n_cams, P, 4)
                 except BaseException:
-                    os.rename(aside, out)
-                    aside = None
+                    stop.set()
                     raise
-            else:
-                os.rename(tmp, out)
-            tmp = None
-        if aside is not None:
-            shutil.rmtree(aside)
-    except BaseException:
-        for left in (tmp, aside):
-            if left is not None:
-                shutil.rmtree(left, ignore_errors=True)
-        for folder in made:
-            with contextlib.suppress(OSError):
-                folder.rmdir()
-        raise
+            for f in range(frames):
+                rows = table[table["frame"] == f]
+                pids = position_id(np.column_stack([rows["x"], rows["y"]]).astype(float), gw, origin)
+                ann = [{"personID": int(i), "positionID": int(pid),
+                        "views": [{"viewNum": v, "xmin": int(b[f, v, i, 0]), "ymin": int(b[f, v, i, 1]),
+                                   "xmax": int(b[f, v, i, 2]), "ymax": int(b[f, v, i, 3])} for v in range(len(numbers))]}
+                       for i, pid in zip(rows["person_id"], pids, strict=True)]
+                (tmp / "annotations_positions" / f"{f:0{lay.annotation_digits}d}.json").write_text(json.dumps(ann))
+            (tmp / "grid.json").write_text(json.dumps({
+                "layout": layout, "cell_m": CELL, "origin_m": list(origin), "grid_width": gw, "grid_height": gh,
+                "position_id": "x_index + grid_width * y_index, x_index = floor((x - origin_m[0]) / cell_m), "
+                               "y_index = floor((y - origin_m[1]) / cell_m)",
+                "views": {str(v): n for v, n in enumerate(numbers)}, "units": "metres, world frame",
+                "undistorted": bool(undistort), "boxes": box, "source": str(episode)}, indent=1) + "\n")
+            # the earlier export is moved aside whole and deleted once the new one is in place:
+            # deleted first, a Ctrl-C meanwhile left part of it without its grid.json (refused by
+            # --overwrite) and neither export
+            with signals_held():
+                if out.exists():
+                    aside = temp_folder(out.parent, f".{out.name}.replaced-")
+                    os.replace(out, aside)
+                    try:
+                        os.rename(tmp, out)
+                    except BaseException:
+                        os.rename(aside, out)
+                        aside = None
+                        raise
+                else:
+                    os.rename(tmp, out)
+                tmp = None
+            if aside is not None:
+                shutil.rmtree(aside)
+        except BaseException:
+            for left in (tmp, aside):
+                if left is not None:
+                    shutil.rmtree(left, ignore_errors=True)
+            raise
     return out
 
 

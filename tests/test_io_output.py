@@ -1,0 +1,87 @@
+"""testbed.output.made_folder: the folders made for an output, removed again when the command stops."""
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from testbed.output import check_output_file, made_folder
+
+
+def test_made_folders_stay_when_the_block_succeeds(tmp_path):
+    with made_folder("OUT", tmp_path / "a" / "b") as f:
+        assert f == tmp_path / "a" / "b" and f.is_dir()
+    assert (tmp_path / "a" / "b").is_dir()
+
+
+@pytest.mark.parametrize("error", [RuntimeError, KeyboardInterrupt])
+def test_made_folders_go_when_the_block_fails_and_nothing_else_does(tmp_path, error):
+    (tmp_path / "a").mkdir()
+    with pytest.raises(error), made_folder("OUT", tmp_path / "a" / "b" / "c"):
+        raise error
+    assert os.listdir(tmp_path / "a") == []              # b and c made here: gone; a was there: kept
+
+
+def test_a_folder_something_else_wrote_into_is_kept(tmp_path):
+    with pytest.raises(RuntimeError), made_folder("OUT", tmp_path / "a" / "b"):
+        (tmp_path / "a" / "other").write_text("x")
+        raise RuntimeError
+    assert os.listdir(tmp_path) == ["a"] and os.listdir(tmp_path / "a") == ["other"]
+
+
+def test_without_keep_the_folders_go_in_any_case(tmp_path):
+    with made_folder("--out", tmp_path / "a" / "b", keep=False):
+        pass
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_folder_that_cannot_be_made_is_one_line_naming_the_option(tmp_path):
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(ValueError, match=r"^--plot: cannot make the folder .*afile/sub \(") as err, \
+            made_folder("--plot", tmp_path / "afile" / "sub"):
+        pass
+    assert "\n" not in str(err.value)
+    with pytest.raises(ValueError, match=r"^OUT: cannot make the folder .*/new/x+ \(File name too long\)$"), \
+            made_folder("OUT", tmp_path / "new" / ("x" * 300)):
+        pass
+    assert sorted(os.listdir(tmp_path)) == ["afile"]
+
+
+def test_a_folder_that_cannot_be_looked_at_is_not_removed_nor_a_traceback(tmp_path, monkeypatch):
+    """On a network file system even root may be refused a look (EACCES): that is not a missing folder."""
+    real = Path.exists
+    hidden = tmp_path / "hidden"
+    hidden.mkdir()
+
+    def exists(self, *args, **kwargs):
+        if self == hidden:
+            raise PermissionError(13, "Permission denied", str(self))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "exists", exists)
+    assert check_output_file("--out", hidden / "new" / "s.npz") == hidden / "new" / "s.npz"
+    monkeypatch.undo()
+    assert hidden.is_dir() and os.listdir(hidden) == []
+
+
+def test_export_and_check_output_file_leave_no_folders(tmp_path, monkeypatch):
+    """Both go through the helper: a checked output file and a failed export leave no folders."""
+    from testbed.wildtrack import export_episode
+
+    assert check_output_file("--out", tmp_path / "a" / "b" / "x.npz").name == "x.npz"
+    assert os.listdir(tmp_path) == []
+    episode = tmp_path / "ep"
+    episode.mkdir()
+    lab = (Path(__file__).parents[1] / "assets" / "scenes" / "lab.yaml").read_text()
+    (episode / "meta.json").write_text(json.dumps({"cameras": [1], "frames": 1, "people": 0, "scene_yaml": lab}))
+    seen = []
+
+    def no_calibration(path):                   # read once the folders are made
+        seen.append((tmp_path / "deep" / "er").is_dir())
+        raise OSError(f"cannot read {path}")
+
+    monkeypatch.setattr("testbed.dataset.read_calibration", no_calibration)
+    with pytest.raises(OSError, match="cam01.yaml"):
+        export_episode(episode, tmp_path / "deep" / "er" / "wt")
+    assert seen == [True] and os.listdir(tmp_path) == ["ep"]
