@@ -1,7 +1,7 @@
 """``camtask scanlines``: frames to scanlines for a render directory or a video.
 
     camtask scanlines DIR [--params FILE] [--frames N] [--out FILE] [--json]
-    camtask scanlines --video FILE --calibration cam.yaml --background N [--out FILE.npz]
+    camtask scanlines --video FILE_OR_FOLDER --calibration cam.yaml --background N [--frames N] [--out FILE.npz]
 
 A render directory gives ``DIR/scanlines.npz`` (``scanlines``, ``gt_scanlines``
 (n_frames, n_cams, W) bool, ``bearings`` (n_cams, W) float radians, ``camera_numbers``
@@ -9,8 +9,8 @@ A render directory gives ``DIR/scanlines.npz`` (``scanlines``, ``gt_scanlines``
 pixels. An episode of a dataset written by ``camtask render`` needs ``--out``: the
 dataset's manifest checksums its files. A video (or a folder of images, sorted) gives
 ``scanlines`` (n_frames, 1, W), ``bearings`` (1, W) and ``camera_numbers`` (1,); its
-first N frames are the background. Files are written atomically, only when the run
-completes.
+first N frames (``--background N``) are the background and ``--frames`` counts the frames
+after them. Files are written atomically, only when the run completes.
 """
 
 from __future__ import annotations
@@ -32,13 +32,16 @@ def add_parser(subparsers) -> None:
                               description=plain_help(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("dir", nargs="?", metavar="DIR", help="render directory (from `camtask render`), or a dataset of one episode")
     p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
-    p.add_argument("--frames", type=int, help="process at most this many frames")
-    p.add_argument("--out", help="output .npz (default DIR/scanlines.npz, or VIDEO_scanlines.npz; "
-                                 "required for an episode of a dataset)")
+    p.add_argument("--frames", type=int, metavar="N",
+                   help="process at most this many frames (with --video: after the background frames)")
+    p.add_argument("--out", metavar="FILE", help="output .npz (default DIR/scanlines.npz, or VIDEO_scanlines.npz "
+                                                 "beside --video; required for an episode of a dataset)")
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON document")
-    p.add_argument("--video", help="video file or folder of images instead of a render directory")
-    p.add_argument("--calibration", help="camera calibration (OpenCV YAML) for --video")
-    p.add_argument("--background", type=int, help="number of leading --video frames that are background")
+    p.add_argument("--video", metavar="FILE_OR_FOLDER",
+                   help="a video file, or a folder of images (sorted by name), instead of a render directory")
+    p.add_argument("--calibration", metavar="FILE", help="camera calibration (OpenCV YAML) of the --video camera")
+    p.add_argument("--background", type=int, metavar="N",
+                   help="with --video: its first N frames are the empty scene, the background")
     p.set_defaults(func=run)
 
 
@@ -59,7 +62,11 @@ def run(args) -> int:
             raise UsageError("--video needs --calibration FILE and --background N")
         return _run_video(args, params)
     if args.dir is None:
-        raise UsageError("expected a render directory DIR, or --video FILE")
+        raise UsageError("expected a render directory DIR, or --video FILE_OR_FOLDER")
+    given = [f"--{k}" for k in ("calibration", "background") if getattr(args, k) is not None]
+    if given:                                       # a render directory has its own: ignoring them misleads
+        raise UsageError(f"{' and '.join(given)} go{'es' if len(given) == 1 else ''} with --video, not with DIR "
+                         "(its calibration/ and background/ are used)")
     return _run_render(args, params)
 
 
@@ -156,8 +163,12 @@ def _run_video(args, params) -> int:
         check_output_file("--out", source.with_name(f"{source.stem}_scanlines.npz"))
     frames = iter_video_frames(source)
     bg = list(itertools.islice(frames, args.background))
-    if len(bg) < args.background:
-        raise ValueError(f"--background: expected at least {args.background} frames, the video has {len(bg)}")
+    first = next(frames, None)                      # the first frame after the background
+    if first is None:
+        raise ValueError(f"--background {args.background}: --video {args.video} has {len(bg)} "
+                         f"frame{'' if len(bg) == 1 else 's'}; expected more than the {args.background} "
+                         "background frames")
+    frames = itertools.chain([first], frames)
     background = np.stack(bg)
     if _grey(background):
         print(f"warning: --video: {source} is grey (R = G = B): grey pixels all have the same colour "
