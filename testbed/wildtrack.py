@@ -179,7 +179,6 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
     """
     from render.gl import signals_held
     from scene import Scene
-    from testbed.dataset import read_calibration
     from testbed.parallel import default_workers
 
     if layout not in LAYOUTS:
@@ -188,13 +187,14 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
     if box not in BOXES:
         raise ValueError(f"box: expected one of {', '.join(BOXES)}, got {box!r}")
     episode, out = Path(episode), Path(out).resolve()   # resolved: "." has no name to replace
-    meta = json.loads((episode / "meta.json").read_text())
-    numbers = list(meta["cameras"])
-    frames = int(meta["frames"])
+    meta = read_meta(episode)
+    numbers = meta["cameras"]
+    frames = meta["frames"]
     room = Scene.from_text(meta["scene_yaml"], source=str(episode / "meta.json")).room
     origin, gw, gh = ground_grid(room.polygon.bounds)
-    P = int(meta["people"])
+    P = meta["people"]
     table = people_table(episode / "people.csv", frames, P) if people is None else people
+    calib = read_calibrations(episode, numbers)         # before any folder is made
     tmp = aside = None
     with made_folder("OUT", out.parent):        # removed again when the export fails
         try:
@@ -205,7 +205,7 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
             maps = {}                              # camera number -> undistortion maps (undistort only)
             for n in numbers:
                 (tmp / "Image_subsets" / f"C{n}").mkdir(parents=True)
-                c = read_calibration(episode / "calibration" / f"cam{n:02d}.yaml")
+                c = calib[n]
                 dist = c["dist"].reshape(1, 5)
                 if undistort:
                     maps[n] = undistort_maps(c["K"], c["dist"], (c["width"], c["height"]))
@@ -264,6 +264,51 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
                 if left is not None:
                     shutil.rmtree(left, ignore_errors=True)
             raise
+    return out
+
+
+def read_meta(episode: str | os.PathLike, complete: bool = True) -> dict:
+    """An episode's meta.json, refused in one line naming the file and the key unless it
+    is a JSON object with (when ``complete``) ``cameras`` (distinct integers >= 1),
+    ``frames`` (>= 1), ``people`` (>= 0) and ``scene_yaml`` (text), as ``camtask render``
+    writes it."""
+    from scene.checks import read_input_text
+
+    path = Path(episode) / "meta.json"
+    try:
+        meta = json.loads(read_input_text("meta.json", path))
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"{path}: expected a JSON object, got {type(meta).__name__}")
+    if not complete:
+        return meta
+    count = lambda v, low: isinstance(v, int) and not isinstance(v, bool) and v >= low
+    for key, ok, what in (
+            ("cameras", lambda v: isinstance(v, list) and v and all(count(n, 1) for n in v) and len(set(v)) == len(v),
+             "a non-empty list of distinct camera numbers >= 1"),
+            ("frames", lambda v: count(v, 1), "an integer >= 1"),
+            ("people", lambda v: count(v, 0), "an integer >= 0"),
+            ("scene_yaml", lambda v: isinstance(v, str), "the scene file's text")):
+        if key not in meta:
+            raise ValueError(f"{path}: no {key!r} (expected {what})")
+        if not ok(meta[key]):
+            raise ValueError(f"{path}: {key}: expected {what}, got {json.dumps(meta[key])[:60]}")
+    return meta
+
+
+def read_calibrations(episode: Path, numbers) -> dict[int, dict]:
+    """Camera number -> :func:`testbed.dataset.read_calibration` of the episode's
+    ``calibration/camNN.yaml``; a file missing or malformed is a one-line error naming it
+    (checked by :func:`pipeline.io.load_calibration`)."""
+    from pipeline.io import load_calibration
+    from testbed.dataset import read_calibration
+
+    out = {}
+    for n in numbers:
+        path = episode / "calibration" / f"cam{n:02d}.yaml"
+        load_calibration(path, n)                        # the arrays read below are there
+        out[n] = read_calibration(path)
     return out
 
 

@@ -4,6 +4,7 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from testbed.output import check_output_file, made_folder
@@ -76,12 +77,15 @@ def test_export_and_check_output_file_leave_no_folders(tmp_path, monkeypatch):
     lab = (Path(__file__).parents[1] / "assets" / "scenes" / "lab.yaml").read_text()
     (episode / "meta.json").write_text(json.dumps({"cameras": [1], "frames": 1, "people": 0, "scene_yaml": lab}))
     seen = []
+    calibration = {"K": np.eye(3), "dist": np.zeros(5), "rvec": np.zeros(3), "tvec": np.zeros(3),
+                   "width": 4, "height": 3}
 
-    def no_calibration(path):                   # read once the folders are made
+    def unwritable(path, **mats):               # the first file written once the folders are made
         seen.append((tmp_path / "deep" / "er").is_dir())
-        raise OSError(f"cannot read {path}")
+        raise OSError(f"cannot write {path}")
 
-    monkeypatch.setattr("testbed.dataset.read_calibration", no_calibration)
-    with pytest.raises(OSError, match="cam01.yaml"):
+    monkeypatch.setattr("testbed.wildtrack.read_calibrations", lambda ep, numbers: {1: calibration})
+    monkeypatch.setattr("testbed.wildtrack._write_fs", unwritable)
+    with pytest.raises(OSError, match="intr_C1.xml"):
         export_episode(episode, tmp_path / "deep" / "er" / "wt")
     assert seen == [True] and os.listdir(tmp_path) == ["ep"]

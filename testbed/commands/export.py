@@ -43,7 +43,7 @@ def run(args) -> int:
 
     from testbed.episodes import episode_name
     from testbed.generate import MANIFEST
-    from testbed.wildtrack import export_episode, people_table
+    from testbed.wildtrack import export_episode, people_table, read_calibrations, read_meta
 
     root = Path(args.dir)
     index = 0 if args.episode is None else args.episode
@@ -53,7 +53,7 @@ def run(args) -> int:
     if not (episode / "meta.json").is_file():
         raise FileNotFoundError(f"DIR: no episode {index} in {root} (expected {episode}/meta.json)")
     if episode == root and args.episode is not None:
-        own = json.loads((episode / "meta.json").read_text()).get("episode")
+        own = read_meta(episode, complete=False).get("episode")
         if own != args.episode:
             raise ValueError(f"--episode {args.episode}: DIR {root} is episode {own} itself; give the dataset "
                              f"folder {root.resolve().parent} to choose another")
@@ -61,9 +61,10 @@ def run(args) -> int:
     check_apart(args.out, root, episode, dataset=dataset if (dataset / MANIFEST).is_file() else None)
     check_export_out(args.out, args.overwrite)
     check_intact(episode)
-    meta = json.loads((episode / "meta.json").read_text())
-    people = people_table(episode / "people.csv", int(meta["frames"]), int(meta["people"]))   # before the bar
-    with tqdm(total=len(meta["cameras"]) * int(meta["frames"]), desc="export", unit="image", file=sys.stderr,
+    meta = read_meta(episode)
+    people = people_table(episode / "people.csv", meta["frames"], meta["people"])   # before the bar
+    read_calibrations(episode, meta["cameras"])                                      # and these
+    with tqdm(total=len(meta["cameras"]) * meta["frames"], desc="export", unit="image", file=sys.stderr,
               dynamic_ncols=True) as bar:
         export_episode(episode, args.out, args.layout, undistort=args.undistort, box=args.boxes,
                        progress=bar.update, people=people)

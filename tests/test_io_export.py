@@ -1,0 +1,78 @@
+"""camtask export of an episode folder whose meta.json or calibration is not as `camtask render` writes them:
+one line naming the file (and the key), before the progress bar and before any folder is made."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from scene import load_scene
+from testbed.cli import main
+from testbed.dataset import write_calibration
+
+
+@pytest.fixture
+def episode(tmp_path):
+    """An episode folder copied out of its dataset (no manifest): meta.json, calibration, people.csv."""
+    ep = tmp_path / "episode_0003"
+    (ep / "calibration").mkdir(parents=True)
+    lab = Path(__file__).parents[1] / "assets" / "scenes" / "lab.yaml"
+    scene = load_scene("lab")
+    for cam in scene.cameras[:2]:
+        write_calibration(ep / "calibration" / f"cam{cam.number:02d}.yaml", cam)
+    (ep / "meta.json").write_text(json.dumps({"episode": 3, "cameras": [1, 2], "frames": 1, "people": 1,
+                                              "format": "png", "scene_yaml": lab.read_text()}))
+    (ep / "people.csv").write_text("frame,person_id,x,y,radius,height\n0,0,2.0,2.0,0.25,1.75\n")
+    return ep
+
+
+def meta_with(ep, **changes):
+    meta = json.loads((ep / "meta.json").read_text())
+    for k, v in changes.items():
+        if v is None:
+            del meta[k]
+        else:
+            meta[k] = v
+    (ep / "meta.json").write_text(json.dumps(meta))
+
+
+def export_error(ep, capsys, *extra):
+    out = ep.parent / "new" / "wt"
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(ep), str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "export:" not in err.replace("camtask export:", "")   # no bar
+    assert not (ep.parent / "new").exists()
+    return err.strip().splitlines()[-1].removeprefix("camtask export: error: ")
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"frames": None}, "meta.json: no 'frames' (expected an integer >= 1)"),
+    ({"people": None}, "meta.json: no 'people' (expected an integer >= 0)"),
+    ({"cameras": None}, "meta.json: no 'cameras' (expected a non-empty list of distinct camera numbers >= 1)"),
+    ({"frames": "2"}, 'meta.json: frames: expected an integer >= 1, got "2"'),
+    ({"frames": 0}, "meta.json: frames: expected an integer >= 1, got 0"),
+    ({"cameras": [1, 1]}, ("meta.json: cameras: expected a non-empty list of distinct camera numbers >= 1, "
+                           "got [1, 1]")),
+    ({"scene_yaml": None}, "meta.json: no 'scene_yaml' (expected the scene file's text)"),
+])
+def test_a_meta_json_without_what_export_reads_is_one_line(episode, capsys, change, message):
+    meta_with(episode, **change)
+    assert export_error(episode, capsys) == f"{episode}/{message}"
+
+
+def test_a_meta_json_that_is_not_an_object_or_not_json_names_the_file(episode, capsys):
+    (episode / "meta.json").write_text("[1, 2]")
+    assert export_error(episode, capsys) == f"{episode}/meta.json: expected a JSON object, got list"
+    (episode / "meta.json").write_text("{bad")
+    assert export_error(episode, capsys).startswith(f"{episode}/meta.json: not valid JSON (Expecting property")
+    # with --episode, whose check read it first
+    assert export_error(episode, capsys, "--episode", "3").startswith(f"{episode}/meta.json: not valid JSON")
+
+
+def test_a_missing_or_malformed_calibration_names_the_file(episode, capsys):
+    """A missing one was AttributeError: 'NoneType' object has no attribute 'ravel'."""
+    (episode / "calibration" / "cam02.yaml").unlink()
+    assert export_error(episode, capsys) == f"calibration: no such file '{episode}/calibration/cam02.yaml'"
+    (episode / "calibration" / "cam02.yaml").write_text("%YAML:1.0\n---\ncamera_number: 2\n")
+    assert export_error(episode, capsys).startswith("calibration: cam02.yaml has no ")
