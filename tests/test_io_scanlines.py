@@ -2,6 +2,7 @@
 
 import argparse
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -65,3 +66,38 @@ def test_help_usage_and_docs_name_the_same_arguments():
     docs = (Path(__file__).parents[1] / "docs" / "pipeline.md").read_text()
     assert f"camtask scanlines {usage}" in docs and f"camtask scanlines {usage}" in scanlines_cmd.__doc__
     assert not re.search(r"--(frames|background) (FRAMES|BACKGROUND)", docs + scanlines_cmd.__doc__)
+
+
+def test_frames_of_another_size_than_the_calibration_name_the_frame_and_both_options(render_dir, tmp_path):
+    """They said "frames: expected shape ..." or "background: expected shape ...", naming no option
+    (--frames and --background are counts) nor the frame; a mixed folder gave numpy's stack error."""
+    import cv2
+
+    from testbed.lossless import VideoWriter
+
+    calib = str(render_dir / "calibration" / "cam01.yaml")
+    folder = tmp_path / "mixed"
+    shutil.copytree(render_dir / "frames" / "cam01", folder)
+    names = sorted(p.name for p in folder.iterdir())
+    for name in (names[0], names[2]):
+        image = cv2.imread(str(folder / name))
+        cv2.imwrite(str(folder / name), cv2.resize(image, (80, 60)))
+    for background, bad in ((2, names[0]), (1, names[0])):
+        with pytest.raises(ValueError, match=rf"^--video: {re.escape(str(folder / bad))} is 80 x 60 pixels; "
+                                             rf"--calibration {re.escape(calib)} is for 160 x 120$"):
+            camtask(["scanlines", "--video", str(folder), "--calibration", calib, "--background", str(background),
+                     "--out", str(tmp_path / "s.npz")])
+    cv2.imwrite(str(folder / names[0]), cv2.imread(str(render_dir / "frames" / "cam01" / names[0])))
+    with pytest.raises(ValueError, match=rf"^--video: .*mixed/{names[2]} is 80 x 60 pixels"):   # after the background
+        camtask(["scanlines", "--video", str(folder), "--calibration", calib, "--background", "1",
+                 "--out", str(tmp_path / "s.npz")])
+    video = tmp_path / "small.mkv"
+    w = VideoWriter(video, 80, 60, 7.5)
+    for _ in range(3):
+        w.write(np.zeros((60, 80, 3), np.uint8))
+    w.close()
+    with pytest.raises(ValueError, match=r"^--video: frame 0 \(from 0, background frames included\) of .*small.mkv "
+                                         r"is 80 x 60 pixels; --calibration .* is for 160 x 120$"):
+        camtask(["scanlines", "--video", str(video), "--calibration", calib, "--background", "1",
+                 "--out", str(tmp_path / "s.npz")])
+    assert not (tmp_path / "s.npz").exists()

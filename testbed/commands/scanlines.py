@@ -161,7 +161,7 @@ def _run_video(args, params) -> int:
     source = Path(args.video).resolve()             # "." has a name once resolved
     out = Path(args.out) if args.out is not None else \
         check_output_file("--out", source.with_name(f"{source.stem}_scanlines.npz"))
-    frames = iter_video_frames(source)
+    frames = _sized(iter_video_frames(source), source, cam, args.calibration)
     bg = list(itertools.islice(frames, args.background))
     first = next(frames, None)                      # the first frame after the background
     if first is None:
@@ -181,6 +181,21 @@ def _run_video(args, params) -> int:
                     camera_numbers=np.array([cam.number]))
     _report(result.metrics() | {"params": params.to_dict(), "out": str(out)}, [cam.number], args.json)
     return 0
+
+
+def _sized(frames, source: Path, cam, calibration: str):
+    """``frames`` (H, W, 3) of ``source``, each as large as the calibration ``cam`` says; else
+    a one-line error naming the frame (its file, for a folder), --video and --calibration."""
+    from pipeline.io import IMAGE_SUFFIXES
+
+    names = sorted(p.name for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES) if source.is_dir() else []
+    for i, frame in enumerate(frames):
+        if frame.shape[:2] != (cam.height, cam.width):
+            what = f"{source / names[i]}" if i < len(names) else \
+                f"frame {i} (from 0, background frames included) of {source}"
+            raise ValueError(f"--video: {what} is {frame.shape[1]} x {frame.shape[0]} pixels; --calibration "
+                             f"{calibration} is for {cam.width} x {cam.height}")
+        yield frame
 
 
 def _grey(images: np.ndarray) -> bool:
