@@ -112,7 +112,13 @@ class PipelineParams:
             raise ValueError(f"params: {path} is not valid YAML ({yamlio.error_text(exc)})") from None
         if isinstance(data, Mapping) and set(data) == {"pipeline"}:
             data = data["pipeline"]
-        return cls.from_mapping(data)
+        if data is not None and not isinstance(data, Mapping):        # empty: the defaults
+            raise ValueError(f"params: {str(path)!r}: expected a mapping of pipeline parameters "
+                             f"(key: value lines), got {type(data).__name__}")
+        try:
+            return cls.from_mapping(data)
+        except ValueError as exc:               # name the file: a bad value would not say where it is
+            raise ValueError(f"params: {str(path)!r}: {exc}") from None
 
     def to_dict(self) -> dict:
         """Plain dict of the parameters (YAML/JSON friendly)."""

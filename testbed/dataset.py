@@ -52,7 +52,14 @@ def write_calibration(path: str | os.PathLike, camera: Camera) -> None:
 
 
 def read_calibration(path: str | os.PathLike) -> dict:
-    """The arrays of a calibration file: K (3, 3), dist (5,), rvec (3,), tvec (3,), width, height."""
+    """The arrays of a calibration file: K (3, 3), dist (5,), rvec (3,), tvec (3,), width, height.
+
+    A file missing or malformed is a one-line ValueError naming it and the key
+    (checked by :func:`pipeline.io.load_calibration`).
+    """
+    from pipeline.io import load_calibration
+
+    load_calibration(path)                  # the arrays read below are there, of their sizes
     fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
     try:
         return {

@@ -299,17 +299,10 @@ def read_meta(episode: str | os.PathLike, complete: bool = True) -> dict:
 
 def read_calibrations(episode: Path, numbers) -> dict[int, dict]:
     """Camera number -> :func:`testbed.dataset.read_calibration` of the episode's
-    ``calibration/camNN.yaml``; a file missing or malformed is a one-line error naming it
-    (checked by :func:`pipeline.io.load_calibration`)."""
-    from pipeline.io import load_calibration
+    ``calibration/camNN.yaml``; a file missing or malformed is a one-line error naming it."""
     from testbed.dataset import read_calibration
 
-    out = {}
-    for n in numbers:
-        path = episode / "calibration" / f"cam{n:02d}.yaml"
-        load_calibration(path, n)                        # the arrays read below are there
-        out[n] = read_calibration(path)
-    return out
+    return {n: read_calibration(episode / "calibration" / f"cam{n:02d}.yaml") for n in numbers}
 
 
 def people_table(path: Path, frames: int, people: int) -> np.ndarray:

@@ -71,6 +71,23 @@ def test_bad_yaml_file(tmp_path):
         load_params(tmp_path / "q.yaml")
 
 
+@pytest.mark.parametrize("text, why", [
+    ("hello\n", "expected a mapping of pipeline parameters (key: value lines), got str"),
+    ("threshold_deg: -3\n", "threshold_deg: expected a finite number >= 0, got -3"),
+    ("blur: 3\n", "pipeline parameters: unknown key 'blur'"),
+])
+def test_a_bad_parameters_file_is_named(tmp_path, text, why):
+    (tmp_path / "p.txt").write_text(text)
+    with pytest.raises(ValueError) as err:
+        load_params(tmp_path / "p.txt")
+    assert str(err.value).startswith(f"params: {str(tmp_path / 'p.txt')!r}: {why}")
+
+
+def test_an_empty_parameters_file_is_the_defaults(tmp_path):
+    (tmp_path / "p.yaml").write_text("")
+    assert load_params(tmp_path / "p.yaml") == PipelineParams()
+
+
 @pytest.mark.parametrize("frames, match", [
     (np.zeros((1, 24, 31, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\) to match the calibration"),
     (np.zeros((2, 24, 32, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\)"),

@@ -1,0 +1,34 @@
+"""testbed.dataset.read_calibration: the arrays back, or one line naming the file and key."""
+
+import numpy as np
+import pytest
+
+from scene import load_scene
+from testbed.dataset import read_calibration, write_calibration
+
+
+def test_round_trip(tmp_path):
+    cam = load_scene("lab").cameras[2]
+    write_calibration(tmp_path / "cam03.yaml", cam)
+    c = read_calibration(tmp_path / "cam03.yaml")
+    np.testing.assert_allclose(c["K"], cam.K)
+    np.testing.assert_allclose(c["dist"], np.ravel(cam.dist))
+    np.testing.assert_allclose(c["tvec"], np.ravel(cam.t))
+    assert (c["width"], c["height"]) == (cam.width, cam.height)
+
+
+def test_missing_file_is_one_line_naming_it(tmp_path):
+    with pytest.raises(FileNotFoundError, match="cam05.yaml") as exc:
+        read_calibration(tmp_path / "cam05.yaml")
+    assert "\n" not in str(exc.value)
+
+
+def test_missing_key_is_one_line_naming_it(tmp_path):
+    cam = load_scene("lab").cameras[0]
+    path = tmp_path / "cam01.yaml"
+    write_calibration(path, cam)
+    text = path.read_text()
+    cut = text.index("tvec:")
+    path.write_text(text[:cut])                         # tvec and what follows gone
+    with pytest.raises(ValueError, match="cam01.yaml.*tvec"):
+        read_calibration(path)
