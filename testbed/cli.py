@@ -16,8 +16,6 @@ import signal
 import sys
 import threading
 
-from render.gl import BackendError  # no pyrender / PyOpenGL import: only ctypes and scene.checks
-
 #: Command modules, in the order ``camtask --help`` lists them.
 COMMANDS = (
     "testbed.commands.render",
@@ -96,18 +94,43 @@ def _stdout_closed() -> bool:
     return False
 
 
+def _prog(argv: list[str] | None) -> str:
+    """"camtask COMMAND" for a stop before the arguments are parsed: the first word of
+    ``argv`` if it names a command, as the later messages do; else "camtask"."""
+    words = sys.argv[1:] if argv is None else argv
+    command = words[0] if words else None
+    return f"camtask {command}" if command in {m.rsplit(".", 1)[1] for m in COMMANDS} else "camtask"
+
+
 def main(argv: list[str] | None = None) -> int:
     # OpenCV's own warnings ("findDecoder imread_(...)") would print beside the one-line
     # error a command gives for the same file; set before OpenCV is imported (workers inherit it)
     os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
-    try:
-        parser = build_parser()     # imports every command module: numpy, OpenCV, shapely
-    except KeyboardInterrupt:       # Ctrl-C in the first half second: no traceback either
-        print("camtask: interrupted", file=sys.stderr)
-        return 130
-    args = parser.parse_args(argv)
+    # SIGTERM is caught from the first line on: importing the commands (numpy, OpenCV,
+    # shapely) takes 0.3-1.2 s, and a `kill` meanwhile ended the process without a word.
+    # This module imports nothing heavy at its top for the same reason.
     in_main = threading.current_thread() is threading.main_thread()     # where signal handlers run
     previous = signal.signal(signal.SIGTERM, _terminate) if in_main else None
+    try:
+        return _dispatch(argv)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _dispatch(argv: list[str] | None) -> int:
+    try:
+        # no pyrender / PyOpenGL import: only ctypes and scene.checks
+        from render.gl import BackendError
+
+        parser = build_parser()     # imports every command module: numpy, OpenCV, shapely
+        args = parser.parse_args(argv)
+    except BaseException as exc:    # Ctrl-C or SIGTERM in the first second: one line, no traceback
+        stop = _interruption(exc)   # (one in an extension module's import can come out chained)
+        if stop is None:
+            raise
+        print(f"{_prog(argv)}: {'terminated' if isinstance(stop, Terminated) else 'interrupted'}", file=sys.stderr)
+        return 128 + signal.SIGTERM if isinstance(stop, Terminated) else 130
     try:
         return int(args.func(args) or 0)
     except (ValueError, UsageError, FileNotFoundError, FileExistsError) as exc:
@@ -139,9 +162,6 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"camtask {args.command}: interrupted", file=sys.stderr)
         return 130
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":  # pragma: no cover
