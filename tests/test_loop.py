@@ -133,9 +133,9 @@ def test_optimal_with_too_many_subsets_is_refused_before_the_first_frame():
 
 
 def test_a_run_too_long_for_memory_is_one_line(capsys):
-    assert main(["run", "lab", "--frames", str(10**12)]) == 1
+    assert main(["run", "lab", "--frames", str(10**12)]) == 2         # refused before the walk
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("camtask run: error: out of memory (Unable to allocate 43.7 TiB")
+    assert len(err) == 1 and err[0].startswith("camtask run: error: --frames: 1000000000000 frames would hold about ")
 
 
 @pytest.mark.parametrize("out, match", [

@@ -40,6 +40,44 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the walk and the sensor noise (default 0)")
 
 
+#: Memory a run holds until its end, for the summary and ``--json``: each frame's results
+#: (scanlines, hull polygons, positions, tracks, their JSON), a fixed part and a part per
+#: tasked camera and per person, over the walk's 16 bytes per person. Measured 11-17 kB a
+#: frame with 3 people and 15-40 kB with 20 (6 and 16 cameras tasked); these err above.
+FRAME_BYTES, CAMERA_BYTES, PERSON_BYTES = 8000, 1000, 1000 + 16
+#: What the run holds whatever its length: the renderer, a pipeline per camera (~0.6 GB).
+BASE_BYTES = 1_000_000_000
+
+
+def available_memory() -> int:
+    """Bytes of memory this machine can give a process now without swapping."""
+    import psutil
+
+    return psutil.virtual_memory().available
+
+
+def check_frames_fit(frames: int, k: int, people: int, option: str = "--frames") -> None:
+    """Raise a one-line ValueError naming ``option`` when ``frames`` frames of ``k`` tasked
+    cameras and ``people`` people would hold more memory than is available now (before the
+    walk: --frames 10**8 walked for hours, then filled the memory frame by frame)."""
+    per_frame = FRAME_BYTES + CAMERA_BYTES * k + PERSON_BYTES * people
+    free = available_memory()
+    need = BASE_BYTES + frames * per_frame
+    if need > free:
+        most = max(0, (free - BASE_BYTES) // per_frame)
+        raise ValueError(f"{option}: {frames} frames would hold about {_gigabytes(need)} of memory until the run "
+                         f"ends (the walk and each frame's results, for the summary), more than the "
+                         f"{_gigabytes(free)} available; expected at most {most} frames here")
+
+
+def _gigabytes(n: float) -> str:
+    """
+    >>> _gigabytes(24.6e9), _gigabytes(1.71e12), _gigabytes(3e8)
+    ('24.6 GB', '1,710 GB', '0.3 GB')
+    """
+    return f"{n / 1e9:.3g} GB" if n < 1e12 else f"{n / 1e9:,.0f} GB"
+
+
 def prepare(args):
     """Validate the arguments and draw the walk: (scene, config, params, truth, sensor rng)."""
     from pipeline import load_params
@@ -65,6 +103,7 @@ def prepare(args):
         len(scene.cameras), as_options=True)
     params = load_params(args.params)
     check_column_threshold(params.column_threshold, scene.cameras, "--params")
+    check_frames_fit(args.frames, config.k, scene.people.count)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
     return scene, config, params, walk(scene, args.frames, motion_rng), sensor_rng
 
