@@ -48,8 +48,11 @@ def check_people_renderable(scene: Scene, option: str) -> None:
         raise ValueError(f"{option}: expected at most {MAX_PEOPLE} people (uint8 labels), got {scene.people.count}")
 
 
-def walk(scene: Scene, frames: int, rng: np.random.Generator) -> np.ndarray:
-    """Random-waypoint positions of the scene's people, (frames, people, 2) float, metres."""
+def walk(scene: Scene, frames: int, rng: np.random.Generator, progress=None) -> np.ndarray:
+    """Random-waypoint positions of the scene's people, (frames, people, 2) float, metres.
+
+    progress : optional callable, called with 1 after each frame's step but the first
+    """
     people = scene.people
     if people.count == 0:
         return np.zeros((frames, 0, 2))
@@ -57,4 +60,4 @@ def walk(scene: Scene, frames: int, rng: np.random.Generator) -> np.ndarray:
     initial = people.positions if people.positions is not None else \
         random_drop(scene.room.polygon, radii, rng)
     return random_waypoint(scene.room.polygon, radii, frames, scene.dt, people.speed, rng,
-                           initial=initial)
+                           initial=initial, progress=progress)
