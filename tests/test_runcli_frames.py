@@ -21,13 +21,13 @@ def test_frames_beyond_any_memory_are_refused_naming_the_flag(command, tmp_path,
 def test_the_bound_follows_the_memory_available_cameras_and_people(monkeypatch, capsys):
     monkeypatch.setattr(run_command, "available_memory", lambda: 2_000_000_000)
     per_frame = run_command.FRAME_BYTES + 6 * run_command.CAMERA_BYTES + 3 * run_command.PERSON_BYTES
-    most = (2_000_000_000 - run_command.BASE_BYTES) // per_frame
+    most = 2_000_000_000 // per_frame
     run_command.check_frames_fit(most, 6, 3)
     with pytest.raises(ValueError, match=f"^--frames: {most + 1} frames would hold about 2 GB .* "
                                          f"expected at most {most} frames here$"):
         run_command.check_frames_fit(most + 1, 6, 3)
     assert cli.main(["run", "lab", "--k", "6", "--people", "3", "--frames", str(most + 1)]) == 2
     assert f"expected at most {most} frames here" in capsys.readouterr().err
-    more_people = (2_000_000_000 - run_command.BASE_BYTES) // (per_frame + 10 * run_command.PERSON_BYTES)
+    more_people = 2_000_000_000 // (per_frame + 10 * run_command.PERSON_BYTES)
     with pytest.raises(ValueError, match=f"expected at most {more_people} frames"):
         run_command.check_frames_fit(most, 6, 13)

@@ -45,10 +45,6 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
 #: tasked camera and per person, over the walk's 16 bytes per person. Measured 11-17 kB a
 #: frame with 3 people and 15-40 kB with 20 (6 and 16 cameras tasked); these err above.
 FRAME_BYTES, CAMERA_BYTES, PERSON_BYTES = 8000, 1000, 1000 + 16
-#: What the run holds whatever its length: the renderer, a pipeline per camera (~0.6 GB).
-BASE_BYTES = 1_000_000_000
-
-
 #: Seconds before the walk's progress bar shows (a short walk shows none).
 WALK_BAR_DELAY = 1.0
 
@@ -66,9 +62,9 @@ def check_frames_fit(frames: int, k: int, people: int, option: str = "--frames")
     walk: --frames 10**8 walked for hours, then filled the memory frame by frame)."""
     per_frame = FRAME_BYTES + CAMERA_BYTES * k + PERSON_BYTES * people
     free = available_memory()
-    need = BASE_BYTES + frames * per_frame
+    need = frames * per_frame           # the renderer's ~1 GB, whatever --frames, is not counted
     if need > free:
-        most = max(0, (free - BASE_BYTES) // per_frame)
+        most = free // per_frame
         raise ValueError(f"{option}: {frames} frames would hold about {_gigabytes(need)} of memory until the run "
                          f"ends (the walk and each frame's results, for the summary), more than the "
                          f"{_gigabytes(free)} available; expected at most {most} frames here")
