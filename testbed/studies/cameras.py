@@ -34,7 +34,7 @@ def add_arguments(p) -> None:
     p.add_argument("--cameras", default="2-16", help="camera counts N (default 2-16)")
     p.add_argument("--limit-cameras", default="inf", metavar="N|inf",
                    help="the 'infinite' case: 'inf' = exact limit (default), or N cameras (paper: 2000)")
-    p.add_argument("--radius", type=float, default=0.1, help="object radius, metres (default 0.1)")
+    core.add_radius(p)
     p.add_argument("--quadrature", type=float, default=None, metavar="H",
                    help="row spacing of the exact limit's quadrature, metres (default radius / 50: 0.002)")
     p.add_argument("--fit-min", type=int, default=8, metavar="N",
@@ -59,9 +59,7 @@ def parse(args) -> dict:
         if limit <= max(cameras):                 # the limit stands for infinitely many cameras
             raise ValueError(f"--limit-cameras: expected more cameras than the largest --cameras "
                              f"({max(cameras)}), got {limit}")
-    if not 0 < args.radius < 0.5:
-        raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
-    core.check_objects("objects", max(objects), args.radius)
+    core.check_discs(max(objects), args.radius)
     quadrature = args.radius / QUADRATURE_PER_RADIUS if args.quadrature is None else args.quadrature
     if not args.radius / 1000 <= quadrature <= 0.05:
         raise ValueError(f"--quadrature: expected a number in [radius / 1000, 0.05] = [{args.radius / 1000:g}, 0.05], "

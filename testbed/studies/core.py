@@ -155,6 +155,96 @@ def check_bounded(name: str, value: float, low: float, high: float, *, low_open:
     return float(value)
 
 
+def check_count(name: str, value: int, minimum: int = 1) -> int:
+    """An integer option ``--name`` >= ``minimum``, else a one-line error."""
+    if value < minimum:
+        raise ValueError(f"--{name}: expected an integer >= {minimum}, got {value}")
+    return int(value)
+
+
+# Options that several studies share: each is declared and checked here once, so that its
+# name, help and one-line errors are the same in every study that takes it.
+
+#: The default of ``--radius``: the paper's discs (the room's radius is 1).
+RADIUS = 0.1
+
+
+def add_objects(p, default: int) -> None:
+    """``--objects N``: how many discs (static, moving, tracking; cameras takes a list)."""
+    p.add_argument("--objects", type=int, default=default, help=f"number of objects (default {default})")
+
+
+def add_k(p, default: str) -> None:
+    """``--k LIST``: the numbers of tasked cameras, parsed by :func:`parse_k`."""
+    p.add_argument("--k", default=default, help=f"numbers of tasked cameras (default {default})")
+
+
+def add_candidates(p, default: int = 16) -> None:
+    """``--candidates N``: cameras evenly on the perimeter to choose from."""
+    p.add_argument("--candidates", type=int, default=default, help=f"cameras to choose from (default {default})")
+
+
+def add_taskers(p, default: str, valid) -> None:
+    """``--taskers LIST``: taskers among ``valid``, parsed by :func:`parse_names`."""
+    p.add_argument("--taskers", default=default,
+                   help=f"comma-separated taskers of {', '.join(valid)} (default {default})")
+
+
+def add_update(p, update_every) -> None:
+    """``--update-every`` and ``--m``. A string ``update_every``: a list of incremental greedy's
+    periods, one record each (moving); an integer: the one period of every tasker but uniform."""
+    if isinstance(update_every, str):
+        p.add_argument("--update-every", default=update_every,
+                       help=f"incremental re-tasking periods in frames (default {update_every})")
+    else:
+        p.add_argument("--update-every", type=int, default=update_every,
+                       help=f"re-tasking period in frames, of every tasker but uniform (default {update_every})")
+    p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
+
+
+def add_steps(p, default: int, note: str = "") -> None:
+    """``--steps N``: frames per trial (``note``: what the default comes to, e.g. ``20 s``)."""
+    p.add_argument("--steps", type=int, default=default,
+                   help=f"frames per trial (default {default}{', ' + note if note else ''})")
+
+
+def add_speed(p, default: float) -> None:
+    """``--speed V``: walking speed, metres (room radii) per second."""
+    p.add_argument("--speed", type=float, default=default, help=f"walking speed, m/s (default {default:g})")
+
+
+def add_radius(p) -> None:
+    """``--radius R``: the discs' radius, checked by :func:`check_discs`."""
+    p.add_argument("--radius", type=float, default=RADIUS,
+                   help=f"object radius, metres; the room's radius is 1 (default {RADIUS:g})")
+
+
+def check_discs(objects: int, radius: float) -> float:
+    """``--radius`` in (0, 0.5) and ``objects`` discs of it fitting in the room; returns the radius."""
+    if not 0 < radius < 0.5:
+        raise ValueError(f"--radius: expected a number in (0, 0.5), got {radius}")
+    check_objects("objects", objects, radius)
+    return float(radius)
+
+
+def parse_k(text, most: int, of: str) -> list[int]:
+    """``--k``: sorted distinct counts >= 1 and at most ``most``, the cameras ``of`` names
+    (e.g. ``"the 16 candidates"``) in the error."""
+    ks = parse_ints("k", text, minimum=1)
+    if max(ks) > most:
+        raise ValueError(f"--k: {max(ks)} cameras exceed {of}")
+    return ks
+
+
+def check_m(m: int, ks) -> int:
+    """``--m`` >= 1, and at most the smallest of ``ks``, the k that incremental greedy runs
+    with (empty: no incremental tasker, and ``--m`` is used by none)."""
+    check_count("m", m)
+    if len(ks) and m > min(ks):
+        raise ValueError(f"--m: expected at most the smallest incremental k = {min(ks)}, got {m}")
+    return int(m)
+
+
 def parse_names(name: str, text: str, valid) -> list[str]:
     """Parse ``"a,b"`` into names, each one of ``valid`` (order kept, duplicates dropped)."""
     names = [s.strip() for s in str(text).split(",") if s.strip()]

@@ -20,15 +20,17 @@ STUDY_ID = 5
 DEFAULT_TRIALS = 2
 
 
+#: The taskers this study can compare (optimal would compare C(16, k) subsets every frame).
+TASKERS = tuple(t for t in core.TASKERS if t != "optimal")
+
+
 def add_arguments(p) -> None:
     p.add_argument("--scene", default="lab", help="calibrated scene file or built-in name (default lab)")
     p.add_argument("--people", type=int, default=3, help="people walking (default 3, as the paper)")
-    p.add_argument("--k", default="6,8,10", help="numbers of tasked cameras (default 6,8,10)")
-    p.add_argument("--taskers", default="uniform,greedy,incremental",
-                   help="comma-separated taskers (default uniform,greedy,incremental)")
+    core.add_k(p, "6,8,10")
+    core.add_taskers(p, "uniform,greedy,incremental", TASKERS)
     p.add_argument("--frames", type=int, default=40, help="frames per trial (default 40, 5.3 s)")
-    p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
-    p.add_argument("--update-every", type=int, default=1, help="incremental re-tasking period (default 1)")
+    core.add_update(p, 1)
     p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     p.add_argument("--no-near-field", dest="near_field", action="store_false",
                    help="carve the hulls from each camera's centre, not only beyond its blind radius")
@@ -42,18 +44,13 @@ def parse(args) -> dict:
 
     scene = with_people(load_scene(args.scene), args.people)
     check_renderable(scene, "--scene")
-    if args.people < 1:
-        raise ValueError(f"--people: expected an integer >= 1, got {args.people}")
+    core.check_count("people", args.people)
     check_people_renderable(scene, "--people")
-    ks = core.parse_ints("k", args.k, minimum=1)
-    if max(ks) > len(scene.cameras):
-        raise ValueError(f"--k: {max(ks)} cameras exceed the scene's {len(scene.cameras)}")
-    taskers = core.parse_names("taskers", args.taskers, [t for t in core.TASKERS if t != "optimal"])
+    ks = core.parse_k(args.k, len(scene.cameras), f"the scene's {len(scene.cameras)}")
+    taskers = core.parse_names("taskers", args.taskers, TASKERS)
     for name in ("frames", "m", "update_every"):
-        if getattr(args, name) < 1:
-            raise ValueError(f"--{name.replace('_', '-')}: expected an integer >= 1, got {getattr(args, name)}")
-    if args.m > min(ks):
-        raise ValueError(f"--m: expected at most the smallest k = {min(ks)}, got {args.m}")
+        core.check_count(name.replace("_", "-"), getattr(args, name))
+    core.check_m(args.m, ks if "incremental" in taskers else [])
     check_column_threshold(load_params(args.params).column_threshold, scene.cameras, "--params")
     return {"scene": args.scene, "people": args.people, "k": ks, "taskers": taskers,
             "frames": args.frames, "m": args.m, "update_every": args.update_every, "params": args.params,
@@ -90,7 +87,8 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
     areas = {}
     for tasker in opts["taskers"]:
         for k in opts["k"]:
-            config = LoopConfig(tasker, k, opts["m"], opts["update_every"], near_field=near_field)
+            m = opts["m"] if tasker == "incremental" else 1           # --m: incremental's alone
+            config = LoopConfig(tasker, k, m, opts["update_every"], near_field=near_field)
             areas[f"{tasker}:{k}"] = float(np.mean([r.hull_area for r in run_loop(scene, config, truth, source)]))
     return {"areas": areas, "min_full": float(np.min(full)), "mean_full": float(np.mean(full)), "cameras": n}
 

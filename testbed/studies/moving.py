@@ -26,44 +26,37 @@ STUDY_ID = 2
 CHUNK = 2
 
 
+#: The taskers this study can compare.
+TASKERS = ("uniform", "greedy", "lazy_greedy", "incremental")
+
+
 def add_arguments(p) -> None:
-    p.add_argument("--objects", type=int, default=5, help="number of objects (default 5)")
-    p.add_argument("--k", default="2-8", help="numbers of tasked cameras (default 2-8)")
-    p.add_argument("--candidates", type=int, default=16, help="cameras to choose from (default 16)")
-    p.add_argument("--taskers", default="uniform,greedy,incremental",
-                   help="comma-separated taskers (default uniform,greedy,incremental)")
-    p.add_argument("--update-every", default="1,3,5,7",
-                   help="incremental re-tasking periods in frames (default 1,3,5,7)")
-    p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
-    p.add_argument("--steps", type=int, default=40, help="frames per trial (default 40)")
+    core.add_objects(p, 5)
+    core.add_k(p, "2-8")
+    core.add_candidates(p)
+    core.add_taskers(p, "uniform,greedy,incremental", TASKERS)
+    core.add_update(p, "1,3,5,7")
+    core.add_steps(p, 40)
     p.add_argument("--dt", type=float, default=0.1, help="seconds per frame (default 0.1)")
-    p.add_argument("--speed", type=float, default=0.5, help="walking speed, m/s (default 0.5)")
-    p.add_argument("--radius", type=float, default=0.1, help="object radius, metres (default 0.1)")
+    core.add_speed(p, 0.5)
+    core.add_radius(p)
 
 
 def parse(args) -> dict:
-    if args.objects < 1:
-        raise ValueError(f"--objects: expected an integer >= 1, got {args.objects}")
-    if args.candidates < 2:
-        raise ValueError(f"--candidates: expected an integer >= 2, got {args.candidates}")
+    core.check_count("objects", args.objects)
+    core.check_count("candidates", args.candidates, 2)
     core.check_cameras("candidates", args.candidates)
-    ks = core.parse_ints("k", args.k, minimum=1)
-    if max(ks) > args.candidates:
-        raise ValueError(f"--k: {max(ks)} cameras exceed the {args.candidates} candidates")
-    taskers = core.parse_names("taskers", args.taskers, ("uniform", "greedy", "lazy_greedy", "incremental"))
+    ks = core.parse_k(args.k, args.candidates, f"the {args.candidates} candidates")
+    taskers = core.parse_names("taskers", args.taskers, TASKERS)
     us = core.parse_ints("update-every", args.update_every, minimum=1)
-    if "incremental" in taskers and not 1 <= args.m <= min(ks):
-        raise ValueError(f"--m: expected an integer in [1, min(k) = {min(ks)}], got {args.m}")
-    if args.steps < 2:
-        raise ValueError(f"--steps: expected an integer >= 2, got {args.steps}")
+    core.check_m(args.m, ks if "incremental" in taskers else [])
+    core.check_count("steps", args.steps, 2)
     core.check_bounded("dt", args.dt, 0.0, core.MAX_DT, low_open=True)
     core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED)
-    if not 0 < args.radius < 0.5:
-        raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
-    core.check_objects("objects", args.objects, args.radius)
+    radius = core.check_discs(args.objects, args.radius)
     return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),
             "taskers": taskers, "update_every": us, "m": int(args.m), "steps": int(args.steps),
-            "dt": float(args.dt), "speed": float(args.speed), "radius": float(args.radius)}
+            "dt": float(args.dt), "speed": float(args.speed), "radius": radius}
 
 
 def settings(opts) -> list[tuple[str, int, int]]:

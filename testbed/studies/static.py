@@ -18,37 +18,34 @@ STUDY_ID = 1
 CHUNK = 10
 
 
+#: The taskers this study can compare (incremental needs a previous frame).
+TASKERS = tuple(t for t in core.TASKERS if t != "incremental")
+
+
 def add_arguments(p) -> None:
-    p.add_argument("--objects", type=int, default=5, help="number of objects (default 5)")
-    p.add_argument("--k", default="2-8", help="numbers of tasked cameras (default 2-8)")
-    p.add_argument("--candidates", type=int, default=16, help="cameras to choose from (default 16)")
-    p.add_argument("--taskers", default="uniform,clustering,optimal,greedy",
-                   help="comma-separated taskers (default uniform,clustering,optimal,greedy)")
-    p.add_argument("--radius", type=float, default=0.1, help="object radius, metres (default 0.1)")
+    core.add_objects(p, 5)
+    core.add_k(p, "2-8")
+    core.add_candidates(p)
+    core.add_taskers(p, "uniform,clustering,optimal,greedy", TASKERS)
+    core.add_radius(p)
     p.add_argument("--max-subsets", type=int, default=200_000,
                    help="refuse 'optimal' beyond this many subsets (default 200000)")
 
 
 def parse(args) -> dict:
-    if args.objects < 1:
-        raise ValueError(f"--objects: expected an integer >= 1, got {args.objects}")
-    if args.candidates < 2:
-        raise ValueError(f"--candidates: expected an integer >= 2, got {args.candidates}")
+    core.check_count("objects", args.objects)
+    core.check_count("candidates", args.candidates, 2)
     core.check_cameras("candidates", args.candidates)
-    ks = core.parse_ints("k", args.k, minimum=1)
-    if max(ks) > args.candidates:
-        raise ValueError(f"--k: {max(ks)} cameras exceed the {args.candidates} candidates")
-    taskers = core.parse_names("taskers", args.taskers, [t for t in core.TASKERS if t != "incremental"])
+    ks = core.parse_k(args.k, args.candidates, f"the {args.candidates} candidates")
+    taskers = core.parse_names("taskers", args.taskers, TASKERS)
     worst = max(ks, key=lambda k: comb(args.candidates, k))
     if "optimal" in taskers and comb(args.candidates, worst) > args.max_subsets:
         raise ValueError(f"--taskers: optimal would compare C({args.candidates}, {worst}) = "
                          f"{comb(args.candidates, worst)} subsets of cameras per trial, more than --max-subsets "
                          f"{args.max_subsets}")
-    if not 0 < args.radius < 0.5:
-        raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
-    core.check_objects("objects", args.objects, args.radius)
+    radius = core.check_discs(args.objects, args.radius)
     return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),
-            "taskers": taskers, "radius": float(args.radius), "max_subsets": int(args.max_subsets)}
+            "taskers": taskers, "radius": radius, "max_subsets": int(args.max_subsets)}
 
 
 def run_trials(start, stop, opts, seed) -> np.ndarray:

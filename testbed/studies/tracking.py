@@ -35,12 +35,11 @@ SPEED = 0.3          # room radii per second: 0.04 per frame at 7.5 Hz
 def add_arguments(p) -> None:
     p.add_argument("--pairs", default="incremental:4,uniform:6,incremental:7,uniform:7",
                    help="networks to compare as TASKER:K (default: the paper's four)")
-    p.add_argument("--objects", type=int, default=6, help="walking discs (default 6)")
-    p.add_argument("--steps", type=int, default=150, help="frames per episode (default 150, 20 s)")
-    p.add_argument("--update-every", type=int, default=1, help="incremental re-tasking period (default 1)")
-    p.add_argument("--m", type=int, default=1, help="cameras swapped per update (default 1)")
-    p.add_argument("--radius", type=float, default=0.1, help="disc radius, room units (default 0.1)")
-    p.add_argument("--speed", type=float, default=SPEED, help=f"walking speed, room units per second (default {SPEED})")
+    core.add_objects(p, 6)
+    core.add_steps(p, 150, "20 s")
+    core.add_update(p, 1)
+    core.add_radius(p)
+    core.add_speed(p, SPEED)
     p.add_argument("--feedback", choices=("hull", "tracks"), default="hull",
                    help="object estimates for tasking: previous hull centres (paper; default) or confirmed tracks")
 
@@ -57,17 +56,12 @@ def parse(args) -> dict:
         core.check_cameras("pairs", int(k))
         pairs.append((name, int(k)))
     for name in ("objects", "steps", "update_every", "m"):
-        if getattr(args, name) < 1:
-            raise ValueError(f"--{name.replace('_', '-')}: expected an integer >= 1, got {getattr(args, name)}")
-    if not 0 < args.radius < 0.5:
-        raise ValueError(f"--radius: expected a number in (0, 0.5), got {args.radius}")
+        core.check_count(name.replace("_", "-"), getattr(args, name))
+    radius = core.check_discs(args.objects, args.radius)
     core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED, low_open=True)
-    core.check_objects("objects", args.objects, args.radius)
-    swapped = [k for name, k in pairs if name == "incremental"]
-    if swapped and args.m > min(swapped):
-        raise ValueError(f"--m: expected at most the smallest incremental k = {min(swapped)}, got {args.m}")
+    core.check_m(args.m, [k for name, k in pairs if name == "incremental"])
     return {"pairs": pairs, "objects": args.objects, "steps": args.steps,
-            "update_every": args.update_every, "m": args.m, "radius": args.radius, "speed": args.speed,
+            "update_every": args.update_every, "m": args.m, "radius": radius, "speed": args.speed,
             "feedback": args.feedback}
 
 

@@ -1,0 +1,91 @@
+"""`camtask study`: options several studies share."""
+
+import re
+
+import pytest
+
+from testbed import cli
+from testbed.studies import lab
+
+STUDIES = ("cameras", "static", "moving", "lab", "tracking")
+
+
+@pytest.fixture(autouse=True)
+def only_study_command(monkeypatch):
+    monkeypatch.setattr(cli, "COMMANDS", ("testbed.commands.study",))
+
+
+def one_line_error(capsys, *argv):
+    assert cli.main(["study", *argv, "--workers", "0", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("camtask study: error: ") and "\n" not in err
+    return err.removeprefix("camtask study: error: ")
+
+
+def option_help(capsys, name, monkeypatch):
+    """{option: its help text, joined onto one line} of ``camtask study NAME --help``."""
+    monkeypatch.setenv("COLUMNS", "200")
+    with pytest.raises(SystemExit):
+        cli.main(["study", name, "--help"])
+    out = capsys.readouterr().out
+    return {m[0]: " ".join(m[1].split()) for m in re.findall(r"^  (--[\w-]+)(?: \S+)?\s+(.*)$", out, re.MULTILINE)}
+
+
+def test_a_shared_option_has_one_help_in_every_study(capsys, monkeypatch):
+    """--radius was 'object radius, metres' in three studies, 'disc radius, room units' in
+    tracking; --m 'cameras swapped per update' there; --update-every 'incremental' where it
+    re-tasks greedy too; --taskers did not say which taskers a study takes."""
+    helps = {name: option_help(capsys, name, monkeypatch) for name in STUDIES}
+    for option in ("--radius", "--m", "--objects", "--k", "--candidates", "--speed", "--steps"):
+        texts = {re.sub(r"\(default [^)]*\)", "", h[option]) for name, h in helps.items()
+                 if option in h and (name, option) != ("cameras", "--objects")}    # a list there
+        assert len(texts) == 1, (option, texts)
+    assert "metres" in helps["tracking"]["--radius"] and "m/s" in helps["tracking"]["--speed"]
+    assert "every tasker but uniform" in helps["tracking"]["--update-every"]
+    assert "every tasker but uniform" in helps["lab"]["--update-every"]
+    assert "incremental" in helps["moving"]["--update-every"]
+    assert "lazy_greedy, incremental (default" in helps["moving"]["--taskers"]
+    assert "optimal" not in helps["lab"]["--taskers"] and "incremental" not in helps["static"]["--taskers"]
+    # the options of every study are in one group, unchanged
+    for h in helps.values():
+        assert {"--trials", "--seed", "--json", "--plot", "--no-progress", "--workers", "--scheduler"} <= set(h)
+
+
+@pytest.mark.parametrize("name", ["cameras", "static", "moving", "tracking"])
+def test_a_shared_option_has_one_error_in_every_study(capsys, name):
+    assert one_line_error(capsys, name, "--radius", "0.7") == "--radius: expected a number in (0, 0.5), got 0.7"
+
+
+@pytest.mark.parametrize("argv", [
+    # ran: --m 0 was checked only with incremental
+    ("moving", "--taskers", "uniform,greedy", "--m", "0", "--k", "2", "--steps", "2", "--trials", "1"),
+    ("tracking", "--pairs", "uniform:4", "--m", "0"),
+])
+def test_m_is_at_least_one_in_every_study(capsys, argv):
+    assert one_line_error(capsys, *argv) == "--m: expected an integer >= 1, got 0"
+
+
+def test_m_larger_than_k_is_refused_alike_where_incremental_runs(capsys):
+    # moving said "expected an integer in [1, min(k) = 2], got 3", tracking as below
+    for argv in (("moving", "--k", "2,4", "--m", "3"), ("tracking", "--pairs", "incremental:2,uniform:4", "--m", "3")):
+        assert one_line_error(capsys, *argv) == "--m: expected at most the smallest incremental k = 2, got 3"
+
+
+def parsed(*argv):
+    args = cli.build_parser().parse_args(["study", *argv])
+    return args
+
+
+def test_lab_m_is_incremental_greedys_alone():
+    """moving and tracking ignore --m without incremental; lab refused --m 7 with k = 6 greedy."""
+    opts = lab.parse(parsed("lab", "--k", "6", "--taskers", "uniform,greedy", "--m", "7"))
+    assert opts["m"] == 7 and opts["taskers"] == ["uniform", "greedy"]
+    with pytest.raises(ValueError, match=r"^--m: expected at most the smallest incremental k = 6, got 7$"):
+        lab.parse(parsed("lab", "--k", "6,8", "--taskers", "greedy,incremental", "--m", "7"))
+
+
+@pytest.mark.render
+def test_lab_runs_greedy_with_an_m_larger_than_k(capsys):
+    assert cli.main(["study", "lab", "--people", "1", "--k", "2", "--taskers", "greedy", "--m", "3",
+                     "--frames", "2", "--trials", "1", "--workers", "0", "--no-progress"]) == 0
+    assert "greedy" in capsys.readouterr().out
