@@ -1,5 +1,6 @@
-"""`camtask study`: options several studies share."""
+"""`camtask study`: options several studies share, --fit-min."""
 
+import json
 import re
 
 import pytest
@@ -89,3 +90,29 @@ def test_lab_runs_greedy_with_an_m_larger_than_k(capsys):
     assert cli.main(["study", "lab", "--people", "1", "--k", "2", "--taskers", "greedy", "--m", "3",
                      "--frames", "2", "--trials", "1", "--workers", "0", "--no-progress"]) == 0
     assert "greedy" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("value", ["-5", "0", "1", "9", "16", "10000000000000000000000"])
+def test_fit_min_out_of_range_is_one_line(capsys, value):
+    """--fit-min 16 of --cameras 4,8,16 ran the study and printed 'N in None: slope n/a'; -5 fitted
+    over N >= -5; both are refused before any trial."""
+    err = one_line_error(capsys, "cameras", "--objects", "2", "--cameras", "4,8,16", "--trials", "1",
+                         f"--fit-min={value}")
+    assert err == f"--fit-min: expected an integer in [2, 8] (at least two --cameras from it on), got {value}"
+
+
+def test_fit_min_needs_two_camera_counts(capsys):
+    err = one_line_error(capsys, "cameras", "--objects", "2", "--cameras", "4", "--trials", "1", "--fit-min", "4")
+    assert err == "--fit-min: the slope needs at least two --cameras, got 4 alone"
+
+
+def test_fit_min_at_its_bounds_and_the_default_without_a_slope(capsys):
+    for value, fitted in (("2", [4, 16]), ("8", [8, 16])):
+        assert cli.main(["study", "cameras", "--objects", "2", "--cameras", "4,8,16", "--trials", "1",
+                         "--fit-min", value, "--workers", "0", "--no-progress", "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["fits"][0]["fit_cameras"] == fitted
+    # the default (8) with cameras below it: the study runs, and the table says why there is no slope
+    assert cli.main(["study", "cameras", "--objects", "2", "--cameras", "4", "--trials", "1",
+                     "--workers", "0", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "None" not in out and "fewer than two N >= --fit-min: slope n/a" in out

@@ -27,6 +27,8 @@ CHUNK = 20
 #: The exact limit's default row spacing is the radius over this: 2 mm for 0.1 m objects
 #: (a fixed 2 mm left the limit of 0.01 m objects 25 % low).
 QUADRATURE_PER_RADIUS = 50
+#: The default of ``--fit-min``: slopes over N >= 8 (N <= 16 by default).
+FIT_MIN = 8
 
 
 def add_arguments(p) -> None:
@@ -37,8 +39,8 @@ def add_arguments(p) -> None:
     core.add_radius(p)
     p.add_argument("--quadrature", type=float, default=None, metavar="H",
                    help="row spacing of the exact limit's quadrature, metres (default radius / 50: 0.002)")
-    p.add_argument("--fit-min", type=int, default=8, metavar="N",
-                   help="fit the log-log slope over cameras >= N (default 8)")
+    p.add_argument("--fit-min", type=int, default=None, metavar="N",
+                   help=f"fit the log-log slope over cameras >= N, at least two of --cameras (default {FIT_MIN})")
 
 
 def parse(args) -> dict:
@@ -64,9 +66,16 @@ def parse(args) -> dict:
     if not args.radius / 1000 <= quadrature <= 0.05:
         raise ValueError(f"--quadrature: expected a number in [radius / 1000, 0.05] = [{args.radius / 1000:g}, 0.05], "
                          f"got {quadrature}")
+    fit_min = FIT_MIN if args.fit_min is None else args.fit_min
+    if args.fit_min is not None:                # a slope needs two camera counts: refused, not "n/a"
+        if len(cameras) < 2:
+            raise ValueError(f"--fit-min: the slope needs at least two --cameras, got {cameras[0]} alone")
+        if not 2 <= fit_min <= cameras[-2]:
+            raise ValueError(f"--fit-min: expected an integer in [2, {cameras[-2]}] (at least two --cameras "
+                             f"from it on), got {fit_min}")
     return {"objects": objects, "cameras": cameras, "limit_cameras": limit,
             "radius": float(args.radius), "quadrature": float(quadrature),
-            "fit_min": int(args.fit_min)}
+            "fit_min": int(fit_min)}
 
 
 def run_trials(m, start, stop, cameras, limit_cameras, radius, h, seed) -> np.ndarray:
@@ -169,7 +178,8 @@ def format_table(result: dict) -> str:
         s = "n/a" if f["slope"] is None else f"{f['slope']:+.2f}"
         se = "n/a" if f["slope_excess"] is None else f"{f['slope_excess']:+.2f}"
         rng = f["fit_cameras"]
-        lines.append(f"  objects={f['objects']:>2d}  N in {rng}: slope {s}   excess slope {se}")
+        where = f"N in {rng}" if rng is not None else "fewer than two N >= --fit-min"
+        lines.append(f"  objects={f['objects']:>2d}  {where}: slope {s}   excess slope {se}")
     return "\n".join(lines)
 
 
