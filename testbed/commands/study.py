@@ -7,6 +7,7 @@ cluster of ``--workers`` processes (``0``: in this process) or ``--scheduler ADD
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import json
 import sys
@@ -52,6 +53,20 @@ def _module(name: str):
     return importlib.import_module(f"testbed.studies.{name}")
 
 
+def local_workers(workers: int | None, tasks: int) -> int | None:
+    """The local worker processes to start for ``tasks`` tasks: never more than the tasks
+    (one more would only start up), and one task in this process (as ``camtask render``
+    does for episodes). ``workers``: ``--workers``, None for one per core.
+
+    >>> local_workers(None, 1), local_workers(8, 3), local_workers(1, 5), local_workers(0, 9)
+    (0, 3, 1, 0)
+    """
+    if workers is None:
+        workers = min(default_workers(), tasks)
+        return 0 if workers == 1 else workers
+    return 0 if workers and tasks <= 1 else min(workers, tasks)
+
+
 def run(args) -> int:
     mod = _module(args.study)
     if args.trials < 1:
@@ -65,15 +80,23 @@ def run(args) -> int:
     from testbed.studies.core import TASKING_BACKEND
 
     t0 = time.perf_counter()
-    with open_client(args.workers, args.scheduler) as client:
-        workers = 0 if client is None else len(client.scheduler_info().get("workers", {}))
+    used = {"workers": 0}
+    with contextlib.ExitStack() as stack:
+        clients: list = []
 
         def runner(func, tasks, weights, desc):
-            return run_tasks(func, tasks, client=client, workers=0, progress=not args.no_progress,
+            tasks = list(tasks)
+            if not clients:      # the cluster starts once the study knows how many tasks it has
+                client = stack.enter_context(open_client(
+                    local_workers(args.workers, len(tasks)) if args.scheduler is None else None, args.scheduler))
+                clients.append(client)
+                used["workers"] = 0 if client is None else len(client.scheduler_info().get("workers", {}))
+            return run_tasks(func, tasks, client=clients[0], workers=0, progress=not args.no_progress,
                              desc=desc, weights=weights)
 
         result = mod.run(opts, args.trials, args.seed, runner)
     elapsed = time.perf_counter() - t0
+    workers = used["workers"]
     result["meta"] = {
         "study": args.study, "seed": args.seed, "trials": args.trials,
         "arguments": {k: v for k, v in opts.items()},
