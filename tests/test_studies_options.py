@@ -1,4 +1,4 @@
-"""`camtask study`: options several studies share, --fit-min, the worker count."""
+"""`camtask study`: options several studies share, --fit-min, the worker count, --trials."""
 
 import contextlib
 import json
@@ -8,7 +8,7 @@ import pytest
 
 from testbed import cli
 from testbed.commands import study as study_command
-from testbed.studies import lab
+from testbed.studies import lab, static
 
 STUDIES = ("cameras", "static", "moving", "lab", "tracking")
 
@@ -155,3 +155,14 @@ def test_no_more_workers_than_tasks(capsys, clusters, argv, workers, started):
 def test_no_cluster_before_the_arguments_are_checked(capsys, clusters):
     one_line_error(capsys, "static", "--k", "99")
     assert clusters == []
+
+
+def test_trials_bounded_before_any_work(capsys, monkeypatch):
+    """--trials 10**12 made every chunk's arguments first: the machine killed the run."""
+    def refuse(*args):
+        raise AssertionError("the study ran")
+
+    monkeypatch.setattr(static, "run", refuse)
+    for value in ("1000000000000", "100001", "0"):
+        assert one_line_error(capsys, "static", "--trials", value) == (
+            f"--trials: expected an integer >= 1 and at most 100000, got {value}")

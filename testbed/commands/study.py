@@ -53,6 +53,11 @@ def _module(name: str):
     return importlib.import_module(f"testbed.studies.{name}")
 
 
+#: The most trials per setting (200 times the paper's 500): every trial is a task argument
+#: before the first runs, and ``--trials 10**12`` had the machine kill the run.
+MAX_TRIALS = 100_000
+
+
 def local_workers(workers: int | None, tasks: int) -> int | None:
     """The local worker processes to start for ``tasks`` tasks: never more than the tasks
     (one more would only start up), and one task in this process (as ``camtask render``
@@ -69,8 +74,8 @@ def local_workers(workers: int | None, tasks: int) -> int | None:
 
 def run(args) -> int:
     mod = _module(args.study)
-    if args.trials < 1:
-        raise ValueError(f"--trials: expected an integer >= 1, got {args.trials}")
+    if not 1 <= args.trials <= MAX_TRIALS:
+        raise ValueError(f"--trials: expected an integer >= 1 and at most {MAX_TRIALS}, got {args.trials}")
     check_seed(args.seed)
     if args.workers is not None and args.workers < 0:
         raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
