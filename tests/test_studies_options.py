@@ -1,4 +1,5 @@
-"""`camtask study`: options several studies share, --fit-min, the worker count, --trials."""
+"""`camtask study`: options several studies share, --fit-min, the worker count, --trials,
+what the progress bar counts and the JSON's keys."""
 
 import contextlib
 import json
@@ -8,7 +9,7 @@ import pytest
 
 from testbed import cli
 from testbed.commands import study as study_command
-from testbed.studies import lab, static
+from testbed.studies import cameras, lab, moving, static, tracking
 
 STUDIES = ("cameras", "static", "moving", "lab", "tracking")
 
@@ -166,3 +167,47 @@ def test_trials_bounded_before_any_work(capsys, monkeypatch):
     for value in ("1000000000000", "100001", "0"):
         assert one_line_error(capsys, "static", "--trials", value) == (
             f"--trials: expected an integer >= 1 and at most 100000, got {value}")
+
+
+def in_process(calls):
+    def runner(func, tasks, weights, desc):
+        calls.append((list(weights), desc))
+        return [func(*t) for t in tasks]
+    return runner
+
+
+@pytest.mark.parametrize("mod, argv, trials, counted", [
+    (cameras, ("cameras", "--objects", "1,2", "--cameras", "4"), 3, 6),     # each object count its drops
+    (static, ("static", "--k", "2", "--taskers", "uniform", "--candidates", "4"), 12, 12),
+    (moving, ("moving", "--k", "2", "--steps", "2", "--candidates", "4", "--taskers", "uniform"), 3, 3),
+    (tracking, ("tracking", "--pairs", "uniform:4", "--steps", "2"), 3, 3),
+])
+def test_the_progress_bar_counts_trials(mod, argv, trials, counted):
+    calls = []
+    mod.run(mod.parse(parsed(*argv)), trials, 0, in_process(calls))
+    ((weights, desc),) = calls
+    assert sum(weights) == counted and desc == argv[0]
+
+
+def test_the_lab_bar_counts_trials_not_frames():
+    """study lab weighted each trial by its frames: 2 trials of 3 frames showed '6/6'."""
+    calls = []
+
+    def runner(func, tasks, weights, desc):
+        calls.append(list(weights))
+        return [{"areas": {"uniform:6": 2.0}, "min_full": 1.0, "mean_full": 1.5, "cameras": 16}] * len(tasks)
+
+    opts = lab.parse(parsed("lab", "--k", "6", "--taskers", "uniform", "--frames", "3"))
+    lab.run(opts, 2, 0, runner)
+    assert calls == [[1, 1]]
+
+
+def test_tracking_json_keeps_seed_and_arguments_in_meta_alone(capsys, tmp_path):
+    """tracking repeated meta.seed and meta.arguments as top-level 'seed' and 'opts'."""
+    png = tmp_path / "fig14.png"
+    assert cli.main(["study", "tracking", "--pairs", "uniform:4", "--steps", "4", "--trials", "1", "--seed", "3",
+                     "--workers", "0", "--no-progress", "--json", "--plot", str(png)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert set(doc) == {"records", "figure_trial", "meta"}
+    assert doc["meta"]["seed"] == 3 and doc["meta"]["arguments"]["pairs"] == [["uniform", 4]]
+    assert png.stat().st_size > 5000

@@ -94,7 +94,7 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
 
 
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
-    per_trial = runner(run_trial, [(t, opts, seed) for t in range(trials)], [opts["frames"]] * trials, "lab")
+    per_trial = runner(run_trial, [(t, opts, seed) for t in range(trials)], [1] * trials, "lab")
     empty = [i for i, t in enumerate(per_trial) if t["min_full"] <= 0]
     if empty:                                   # the residual's denominator
         raise ValueError(f"--scene: the hull of all its cameras was empty in a frame of trial {empty[0]}, so the "

@@ -128,11 +128,11 @@ def run(opts: dict, trials: int, seed: int, runner) -> dict:
         rec["mse"], rec["mse_sem"] = core.mean_sem(mse) if mse else (None, None)
         rec["mse_trials"] = len(mse)
         records.append(rec)
-    return {"records": records, "figure_trial": 0, "seed": seed, "opts": opts}
+    return {"records": records, "figure_trial": 0}
 
 
 def format_table(result: dict) -> str:
-    objects = result["opts"]["objects"]
+    objects = result["meta"]["arguments"]["objects"]
     lines = [f"Tracking on hull polygon centres, {objects} walking disc{'s' * (objects != 1)} (mean over trials):",
              f"{'tasker':>12} {'k':>3} {'MSE':>9} {'MOTA':>7} {'IDF1':>7}"]
     for r in result["records"]:
@@ -150,7 +150,7 @@ def plot(result: dict, path: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    opts, seed = result["opts"], result["seed"]
+    opts, seed = result["meta"]["arguments"], result["meta"]["seed"]
     pairs = opts["pairs"]
     fig, axes = plt.subplots(1, len(pairs), figsize=(4 * len(pairs), 4.2), squeeze=False)
     for ax, (tasker, k) in zip(axes[0], pairs):
