@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import io
 import os
 import signal
 import sys
@@ -84,14 +85,26 @@ def _interruption(exc: BaseException) -> KeyboardInterrupt | None:
 
 
 def _stdout_closed() -> bool:
-    """Whether standard output is a pipe whose reader has gone."""
+    """Whether standard output is a pipe whose reader has gone.
+
+    Flushing again is not enough: the failed write dropped the buffer, so a second flush
+    has nothing to write and succeeds. The pipe itself says so: polled, a pipe's write end
+    reports an error once no reader is left (Linux, macOS).
+    """
+    import select
+
     try:
         sys.stdout.flush()
     except BrokenPipeError:
         return True
     except (OSError, ValueError):
         return False
-    return False
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(events & select.POLLERR for _, events in poller.poll(0))
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):   # no file behind it
+        return False
 
 
 def _prog(argv: list[str] | None) -> str:

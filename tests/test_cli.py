@@ -87,6 +87,27 @@ def test_a_reader_that_stops_reading_ends_the_command_quietly(monkeypatch, capsy
     assert capsys.readouterr().err == ""
 
 
+def test_a_pipe_whose_reader_has_gone_is_told_from_its_dropped_buffer(monkeypatch, capsys):
+    """`camtask study ... | head -1` said "error: [Errno 32] Broken pipe" in most runs: the
+    failed flush drops what was buffered, so flushing again succeeded and the pipe looked fine."""
+    import os
+    import signal
+
+    from testbed.commands import study
+
+    read, write = os.pipe()
+    os.close(read)                                          # `head` has what it wanted
+    with os.fdopen(write, "w") as stdout:
+        monkeypatch.setattr(sys, "stdout", stdout)
+
+        def printed_a_table(args):
+            print("a table the reader no longer wants\n" * 2000)   # past the buffer: BrokenPipeError, dropped
+        monkeypatch.setattr(study, "run", printed_a_table)
+        assert cli.main(["study", "cameras"]) == 128 + signal.SIGPIPE
+        assert capsys.readouterr().err == ""
+        monkeypatch.undo()
+
+
 def test_ctrl_c_that_numba_turned_into_a_system_error_is_one_line(monkeypatch, capsys):
     """Ctrl-C while numba's dispatcher called back into Python (to unpickle a constant, as in
     the pipeline's angle_mask) came out as "SystemError: CPUDispatcher(...) returned a result
