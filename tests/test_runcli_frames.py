@@ -31,3 +31,15 @@ def test_the_bound_follows_the_memory_available_cameras_and_people(monkeypatch, 
     more_people = 2_000_000_000 // (per_frame + 10 * run_command.PERSON_BYTES)
     with pytest.raises(ValueError, match=f"expected at most {more_people} frames"):
         run_command.check_frames_fit(most, 6, 13)
+
+
+def test_study_lab_refuses_a_trial_longer_than_the_memory(monkeypatch, capsys):
+    """Each lab trial keeps every camera's scanlines: --frames 10**8 sat at 0/1 trials for
+    hours, then filled the memory."""
+    monkeypatch.setattr(run_command, "available_memory", lambda: 2_000_000_000)
+    assert cli.main(["study", "lab", "--frames", str(10**8), "--trials", "1", "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    per_frame = 2 * 16 * 640 + 16 * 3
+    assert err == (f"camtask study: error: --frames: 100000000 frames would hold about 2,053 GB of memory in each "
+                   f"trial (every camera's scanlines of every frame), more than the 2 GB available; expected at "
+                   f"most {2_000_000_000 // per_frame} frames here\n")

@@ -60,14 +60,19 @@ def check_frames_fit(frames: int, k: int, people: int, option: str = "--frames")
     """Raise a one-line ValueError naming ``option`` when ``frames`` frames of ``k`` tasked
     cameras and ``people`` people would hold more memory than is available now (before the
     walk: --frames 10**8 walked for hours, then filled the memory frame by frame)."""
-    per_frame = FRAME_BYTES + CAMERA_BYTES * k + PERSON_BYTES * people
+    check_frames_memory(frames, FRAME_BYTES + CAMERA_BYTES * k + PERSON_BYTES * people,
+                        "until the run ends (the walk and each frame's results, for the summary)", option)
+
+
+def check_frames_memory(frames: int, per_frame: int, held: str, option: str = "--frames") -> None:
+    """Raise a one-line ValueError naming ``option`` when ``frames`` times ``per_frame``
+    bytes, held as ``held`` says, are more than the memory available now (the fixed part,
+    ~1 GB for a renderer whatever ``frames``, is not counted)."""
     free = available_memory()
-    need = frames * per_frame           # the renderer's ~1 GB, whatever --frames, is not counted
+    need = frames * per_frame
     if need > free:
-        most = free // per_frame
-        raise ValueError(f"{option}: {frames} frames would hold about {_gigabytes(need)} of memory until the run "
-                         f"ends (the walk and each frame's results, for the summary), more than the "
-                         f"{_gigabytes(free)} available; expected at most {most} frames here")
+        raise ValueError(f"{option}: {frames} frames would hold about {_gigabytes(need)} of memory {held}, more "
+                         f"than the {_gigabytes(free)} available; expected at most {free // per_frame} frames here")
 
 
 def _gigabytes(n: float) -> str:
