@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Mapping
+from decimal import Decimal
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,7 @@ def check_choice(name: str, value: Any, valid: Iterable[str]) -> str:
     """Return ``value`` if it is one of ``valid``, else raise listing the valid values."""
     valid = tuple(valid)
     if value not in valid:
-        raise ValueError(f"{name}: unknown value {value!r}; expected one of {', '.join(valid)}")
+        raise ValueError(f"{name}: unknown value {shown(value)}; expected one of {', '.join(valid)}")
     return value
 
 
@@ -53,14 +54,29 @@ def read_input_text(name: str, path: str | os.PathLike) -> str:
                          f"offset {exc.start})") from None
 
 
+def shown(value: Any) -> str:
+    """``value`` as an error message shows it: its repr, but an integer of more than 16
+    digits (YAML reads ``1000...0`` as one, however long) in six significant digits.
+
+    >>> shown(10**400), shown(-123456789012345678901), shown(1e300), shown("49")
+    ('1e+400', '-1.23457e+20', '1e+300', "'49'")
+    """
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**16:
+        return format(Decimal(value).normalize(), ".6g")
+    return repr(value)
+
+
 def _number(name: str, value: Any) -> float:
-    """``value`` as a float; booleans and strings are not numbers here."""
+    """``value`` as a float; booleans and strings are not numbers here. An integer beyond
+    the float range is an infinity (refused as not finite, by the checks that need it)."""
     if isinstance(value, (bool, str, bytes)):
-        raise ValueError(f"{name}: expected a number, got {value!r}")
+        raise ValueError(f"{name}: expected a number, got {shown(value)}")
     try:
         return float(value)
+    except OverflowError:
+        return float("inf") if value > 0 else float("-inf")
     except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected a number, got {value!r}") from None
+        raise ValueError(f"{name}: expected a number, got {shown(value)}") from None
 
 
 def check_finite(name: str, value: Any) -> float:
@@ -71,7 +87,7 @@ def check_finite(name: str, value: Any) -> float:
     """
     x = _number(name, value)
     if not np.isfinite(x):
-        raise ValueError(f"{name}: expected a finite number, got {value!r}")
+        raise ValueError(f"{name}: expected a finite number, got {shown(value)}")
     return x
 
 
@@ -80,7 +96,7 @@ def check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
     x = _number(name, value)
     if not np.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
         bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name}: expected a finite number {bound}, got {value!r}")
+        raise ValueError(f"{name}: expected a finite number {bound}, got {shown(value)}")
     return x
 
 
@@ -97,16 +113,16 @@ def check_between(name: str, value: Any, low: float, high: float, unit: str, *, 
     if not (np.isfinite(x) and low <= x <= high) or (low_open and x == low):
         most = f" and at most {high:g}" if np.isfinite(high) else ""
         raise ValueError(f"{name}: expected a finite number {'>' if low_open else '>='} {low:g}{most} {unit}, "
-                         f"got {value!r}")
+                         f"got {shown(value)}")
     return x
 
 
 def check_int(name: str, value: Any, *, minimum: int | None = None) -> int:
     """Return ``value`` as an int, optionally at least ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name}: expected an integer, got {value!r}")
+        raise ValueError(f"{name}: expected an integer, got {shown(value)}")
     if minimum is not None and value < minimum:
-        raise ValueError(f"{name}: expected an integer >= {minimum}, got {value}")
+        raise ValueError(f"{name}: expected an integer >= {minimum}, got {shown(int(value))}")
     return int(value)
 
 
@@ -125,6 +141,8 @@ def check_array(name: str, value: Any, shape: tuple[int | None, ...], *, dtype=f
         raise ValueError(f"{name}: expected numbers of shape {_shape_text(shape)}, got {odd!r}")
     try:
         arr = np.asarray(value, dtype=dtype)
+    except OverflowError:                       # an integer of more than 308 digits
+        raise ValueError(f"{name}: expected finite numbers, got one beyond the float range") from None
     except (TypeError, ValueError):
         raise ValueError(f"{name}: expected numbers of shape {_shape_text(shape)}") from None
     if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape)):

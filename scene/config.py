@@ -27,6 +27,7 @@ from .checks import (
     check_mapping,
     read_input_text,
     readonly,
+    shown,
 )
 from .room import Room
 
@@ -51,6 +52,13 @@ MAX_SPEED = 100.0
 #: The most cameras in a ring (as the studies' ``--cameras``): a ring of 10**9 filled the memory
 #: building them one by one.
 MAX_RING_CAMERAS = 10_000
+#: The narrowest and widest horizontal field of view of a calibrated camera, degrees. OpenGL
+#: draws in float32, whose error grows with the focal length: a 640-pixel camera drew a
+#: person's edge 1.3 px off at 0.001 degrees (focal length 3.7e7 pixels; at 1e-10 degrees it
+#: saw nothing; at 1e-300 the rectification blamed the principal point); at 1 degree the
+#: widest image (MAX_RESOLUTION) has a focal length of 9.4e5 pixels, 40 times less. At 179
+#: degrees the image's edges look 89.5 degrees off its axis.
+HFOV_RANGE = (1.0, 179.0)
 BUILTIN_SCENES = ("lab", "circle")
 BACKENDS = ("egl", "osmesa")
 
@@ -228,12 +236,12 @@ def _parse_cameras(cfg: Any, room: Room) -> tuple:
     height = check_int("cameras.intrinsics.resolution", res[1], minimum=2)
     if max(width, height) > MAX_RESOLUTION:
         raise ValueError(f"cameras.intrinsics.resolution: expected at most {MAX_RESOLUTION} pixels a side, "
-                         f"got {width} x {height}")
-    hfov = _check_fov("cameras.intrinsics.hfov_deg", intr["hfov_deg"], maximum=179.0)
+                         f"got {shown(width)} x {shown(height)}")
+    hfov = _check_fov("cameras.intrinsics.hfov_deg", intr["hfov_deg"], *HFOV_RANGE)
     dist = check_array("cameras.intrinsics.distortion", intr["distortion"], (5,))
     principal = intr.get("principal")
     if principal is not None:
-        principal = check_array("cameras.intrinsics.principal", principal, (2,))
+        principal = check_principal("cameras.intrinsics.principal", principal, width, height)
     poses = cfg["poses"]
     if not isinstance(poses, list) or not poses:
         raise ValueError("cameras.poses: expected a non-empty list of camera poses")
@@ -242,16 +250,17 @@ def _parse_cameras(cfg: Any, room: Room) -> tuple:
         where = f"cameras.poses[{i}]"
         check_mapping(where, pose, ("number", "position", "yaw_deg", "pitch_deg"),
                       ("number", "position", "yaw_deg", "pitch_deg"))
+        number = check_int(f"{where}.number", pose["number"], minimum=1)
         pos = check_array(f"{where}.position", pose["position"], (3,))
         if not room.contains_point(pos[:2]) or not 0 < pos[2] < room.height:
-            raise ValueError(f"{where}.position: camera {pose['number']} at {pos.tolist()} is outside the room")
+            raise ValueError(f"{where}.position: camera {shown(number)} at {pos.tolist()} is outside the room")
         yaw = check_between(f"{where}.yaw_deg", pose["yaw_deg"], -360.0, 360.0, "degrees")
         pitch = check_finite(f"{where}.pitch_deg", pose["pitch_deg"])
         if not -90 < pitch < 90:
             raise ValueError(f"{where}.pitch_deg: expected a pitch in (-90, 90) degrees (down is positive), "
                              f"got {pose['pitch_deg']!r}")
         cameras.append(Camera.from_pose(
-            check_int(f"{where}.number", pose["number"], minimum=1), pos,
+            number, pos,
             np.radians(yaw), np.radians(pitch), width, height, hfov, dist, principal))
     _check_numbers(cameras)
     return tuple(sorted(cameras, key=lambda c: c.number))     # cameras[i] is camera number i + 1
@@ -263,8 +272,8 @@ def _parse_ring(cfg: Any, room: Room) -> tuple:
         raise ValueError("cameras.ring: a ring of cameras needs a circular room")
     n = check_int("cameras.ring.count", cfg["count"], minimum=1)
     if n > MAX_RING_CAMERAS:
-        raise ValueError(f"cameras.ring.count: expected at most {MAX_RING_CAMERAS} cameras, got {n}")
-    fov = _check_fov("cameras.ring.fov_deg", cfg["fov_deg"], maximum=180.0)
+        raise ValueError(f"cameras.ring.count: expected at most {MAX_RING_CAMERAS} cameras, got {shown(n)}")
+    fov = _check_fov("cameras.ring.fov_deg", cfg["fov_deg"], 0.0, 180.0)
     radius = float(np.max(np.linalg.norm(room.vertices, axis=1)))
     angles = 2 * np.pi * np.arange(n) / n
     return tuple(
@@ -273,20 +282,44 @@ def _parse_ring(cfg: Any, room: Room) -> tuple:
     )
 
 
-def _check_fov(name: str, value: Any, maximum: float) -> float:
+def _check_fov(name: str, value: Any, minimum: float, maximum: float) -> float:
+    """A field of view in degrees, at most ``maximum`` and at least ``minimum`` (more than 0 for
+    ``minimum`` 0), as radians."""
     try:
         deg = None if isinstance(value, (bool, str, bytes)) else float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         deg = None
-    if deg is None or not 0 < deg <= maximum:
-        raise ValueError(f"{name}: expected a field of view in (0, {maximum:g}] degrees, got {value!r}")
+    if deg is None or not (minimum <= deg <= maximum and deg > 0):
+        low = "(0" if minimum == 0 else f"[{minimum:g}"
+        raise ValueError(f"{name}: expected a field of view in {low}, {maximum:g}] degrees, got {shown(value)}")
     return float(np.radians(deg))
+
+
+def check_principal(name: str, value: Any, width: int, height: int) -> np.ndarray:
+    """The principal point ``value`` (2,) pixels (u, v) of a ``width`` x ``height`` image, at
+    most one image width (height) outside its pixels' edges, else a one-line error: the
+    optical axis of a camera whose principal point is farther off meets nothing it sees, the
+    focal length that ``hfov_deg`` gives (from half the width) no longer tells its view, and at
+    1e300 the lens checks failed with NaN and blamed the distortion.
+
+    >>> check_principal("principal", [1e300, 236.8], 640, 480)
+    Traceback (most recent call last):
+    ...
+    ValueError: principal: expected [u, v] pixels at most one image size outside the image, u in -640.5..1279.5 and v in -480.5..959.5, got [1e+300, 236.8]
+    """
+    uv = check_array(name, value, (2,))
+    lo, hi = -0.5 - np.array([width, height]), np.array([2 * width, 2 * height]) - 0.5
+    if not np.all((lo <= uv) & (uv <= hi)):
+        raise ValueError(f"{name}: expected [u, v] pixels at most one image size outside the image, "
+                         f"u in {lo[0]:g}..{hi[0]:g} and v in {lo[1]:g}..{hi[1]:g}, got [{uv[0]:g}, {uv[1]:g}]")
+    return uv
 
 
 def _check_numbers(cameras) -> None:
     numbers = sorted(c.number for c in cameras)
     if numbers != list(range(1, len(cameras) + 1)):
-        raise ValueError(f"cameras.poses: expected camera numbers 1..{len(cameras)} once each, got {numbers}")
+        raise ValueError(f"cameras.poses: expected camera numbers 1..{len(cameras)} once each, "
+                         f"got [{', '.join(map(shown, numbers))}]")
 
 
 def _parse_people(cfg: Any, room: Room) -> People:
@@ -312,7 +345,7 @@ def _parse_people(cfg: Any, room: Room) -> People:
         colours = default_colours(count)
     colours = check_array("people.colours", colours, (None, 3))
     if len(colours) < count or np.any(colours < 0) or np.any(colours > 255) or np.any(colours != np.round(colours)):
-        raise ValueError(f"people.colours: expected at least {count} RGB triples of integers in 0..255")
+        raise ValueError(f"people.colours: expected at least {shown(count)} RGB triples of integers in 0..255")
     return People(count, radius, height, speed, readonly(colours[:count].astype(np.uint8)), positions)
 
 
@@ -324,7 +357,7 @@ def check_people_capacity(name: str, count: int, radius: float, room: Room) -> N
     """
     capacity = room.area / (np.pi * radius**2) / 4
     if count > capacity:
-        raise ValueError(f"{name}: {count} people of radius {radius:g} m do not fit in the room; "
+        raise ValueError(f"{name}: {shown(count)} people of radius {radius:g} m do not fit in the room; "
                          f"expected at most {int(capacity)}")
 
 
@@ -375,10 +408,11 @@ def _parse_uniform_sets(cfg: Any, n_cameras: int) -> dict[int, tuple[int, ...]]:
     out = {}
     for k, nums in cfg.items():
         k = check_int("uniform_sets key", k, minimum=1)
+        where = f"uniform_sets[{shown(k)}]"
         if not isinstance(nums, list):
-            raise ValueError(f"uniform_sets[{k}]: expected a list of {k} camera numbers, got {nums!r}")
-        nums = tuple(check_int(f"uniform_sets[{k}]", n) for n in nums)
+            raise ValueError(f"{where}: expected a list of {shown(k)} camera numbers, got {nums!r}")
+        nums = tuple(check_int(where, n) for n in nums)
         if len(nums) != k or len(set(nums)) != k or not all(1 <= n <= n_cameras for n in nums):
-            raise ValueError(f"uniform_sets[{k}]: expected {k} distinct camera numbers in 1..{n_cameras}")
+            raise ValueError(f"{where}: expected {shown(k)} distinct camera numbers in 1..{n_cameras}")
         out[k] = tuple(sorted(nums))
     return out
