@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from scene.camera import Camera, rotation_from_yaw_pitch
+from scene.camera import Camera, distort_normalised, rotation_from_yaw_pitch, undistort_points
 
 
 def level_rotation(camera: Camera) -> np.ndarray:
@@ -64,10 +64,8 @@ def virtual_extent(camera: Camera) -> tuple[float, float, float, float]:
 def level_points(camera: Camera, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Raw image points (m, 2) float (u, v) pixels -> their (x, y) on the level virtual
     camera's z = 1 plane (lens distortion removed, pitch turned level); (m,) each."""
-    pts = np.asarray(uv, dtype=float).reshape(-1, 1, 2)
-    norm = cv2.undistortPoints(pts, camera.K, camera.dist, None, None, None,
-                               (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10))
-    rays = np.concatenate([norm.reshape(-1, 2), np.ones((len(pts), 1))], 1) @ level_rotation(camera).T
+    norm = undistort_points(uv, camera.K, camera.dist, eps=1e-10)
+    rays = np.concatenate([norm, np.ones((len(norm), 1))], 1) @ level_rotation(camera).T
     if not np.all(rays[:, 2] > 0.05):               # NaN (undistortion failed) too
         raise ValueError(f"camera {camera.number}: field of view too wide, or pitch too steep, to rectify to a level "
                          "camera (every pixel must look less than 87 degrees from the level forward direction: "
@@ -75,33 +73,68 @@ def level_points(camera: Camera, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return rays[:, 0] / rays[:, 2], rays[:, 1] / rays[:, 2]
 
 
-#: How far (pixels) a pixel may land from itself when undistorted and distorted again.
-ROUND_TRIP = 0.5
+#: How far (pixels) a pixel may land from itself when undistorted and distorted again
+#: (:func:`scene.camera.undistort_points` takes every pixel that has a ray to within 1e-9 px).
+ROUND_TRIP = 1e-3
 
 
-def check_lens(camera: Camera, samples: int = 33) -> None:
+def check_lens(camera: Camera, samples: int = 65) -> None:
     """Raise a one-line ValueError unless ``camera``'s lens distortion maps the rays it
     sees one to one onto its image: every pixel (a grid of ``samples`` x ``samples``, the
     edges included) undistorts to a ray that distorts back to it (within ``ROUND_TRIP``
-    pixels), and the radial factor ``r (1 + k1 r^2 + k2 r^4 + k3 r^6)`` grows out to
-    the farthest such ray. Coefficients that fold over inside the image (``k1 = -0.6`` on the
-    lab's 49-degree lens) would render rays twice (a "glass ball") and rectify nonsense."""
+    pixels), the distortion keeps its orientation (a positive Jacobian determinant) at those
+    rays and at every ray of a fine grid out to the farthest of them that lands on the
+    image, and the radial factor ``r (1 + k1 r^2 + k2 r^4 + k3 r^6)`` grows out to that
+    farthest ray. Coefficients that fold over inside the image (``k1 = -0.6`` on the lab's
+    49-degree lens) would render rays twice (a "glass ball") and rectify nonsense."""
     u = np.linspace(-0.5, camera.width - 0.5, samples)
     v = np.linspace(-0.5, camera.height - 0.5, samples)
-    pts = np.stack(np.meshgrid(u, v), -1).reshape(-1, 1, 2)
-    norm = cv2.undistortPoints(pts, camera.K, camera.dist, None, None, None,
-                               (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10)).reshape(-1, 2)
-    back = cv2.projectPoints(np.column_stack([norm, np.ones(len(norm))]), np.zeros(3), np.zeros(3), camera.K,
-                             camera.dist)[0].reshape(-1, 2)
-    k1, k2, _, _, k3 = np.asarray(camera.dist, float).ravel()[:5]
-    r = np.linspace(0.0, 1.01 * float(np.hypot(norm[:, 0], norm[:, 1]).max()), 2001)
-    slope = 1 + 3 * k1 * r**2 + 5 * k2 * r**4 + 7 * k3 * r**6          # d/dr of the radial factor
-    miss = float(np.abs(back - pts.reshape(-1, 2)).max())
-    if not (np.all(np.isfinite(norm)) and miss <= ROUND_TRIP and slope.min() > 0):   # NaN: undistortion failed
-        how = (f"a pixel undistorted and distorted again lands {miss:.1f} pixels away, or rays farther out come "
-               "back nearer the centre") if np.all(np.isfinite(norm)) else "some of its pixels cannot be undistorted"
+    pts = np.stack(np.meshgrid(u, v), -1).reshape(-1, 2)
+    norm = undistort_points(pts, camera.K, camera.dist, eps=1e-10)
+    how = None
+    if not np.all(np.isfinite(norm)):
+        how = "some of its pixels cannot be undistorted"
+    else:
+        back = cv2.projectPoints(np.column_stack([norm, np.ones(len(norm))]), np.zeros(3), np.zeros(3), camera.K,
+                                 camera.dist)[0].reshape(-1, 2)
+        with np.errstate(over="ignore", invalid="ignore"):
+            miss = float(np.abs(back - pts).max())
+            reach = 1.01 * float(np.hypot(norm[:, 0], norm[:, 1]).max())
+            turned = _mirrored(norm, camera.dist) or _mirrored(_ray_grid(reach), camera.dist, camera)
+            k1, k2, _, _, k3 = np.asarray(camera.dist, float).ravel()[:5]
+            r = np.linspace(0.0, reach, 2001)
+            slope = 1 + 3 * k1 * r**2 + 5 * k2 * r**4 + 7 * k3 * r**6          # d/dr of the radial factor
+        if not miss <= ROUND_TRIP:
+            how = f"a pixel undistorted and distorted again lands {miss:.3g} pixels away"
+        elif turned:
+            how = "it mirrors the rays near some of its pixels"
+        elif not slope.min() > 0:
+            how = "rays farther out come back nearer the centre"
+    if how is not None:
+        cx, cy = camera.K[0, 2], camera.K[1, 2]
+        off = not (-0.5 <= cx <= camera.width - 0.5 and -0.5 <= cy <= camera.height - 0.5)
         raise ValueError(f"camera {camera.number}: its lens distortion {np.round(camera.dist, 4).tolist()} folds over "
-                         f"inside its image ({how}); use smaller distortion coefficients")
+                         f"inside its image ({how}); use smaller distortion coefficients"
+                         + (f", or a principal point nearer the image than ({cx:g}, {cy:g})" if off else ""))
+
+
+def _ray_grid(reach: float, n: int = 257) -> np.ndarray:
+    """Rays (m, 2), normalised, of an n x n grid over the disc of radius ``reach``."""
+    g = np.linspace(-reach, reach, n)
+    xy = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+    return xy[np.hypot(xy[:, 0], xy[:, 1]) <= reach]
+
+
+def _mirrored(rays: np.ndarray, dist, camera: Camera | None = None) -> bool:
+    """True if the lens model turns over (Jacobian determinant <= 0) at any of ``rays`` (m, 2)
+    (of those that land on ``camera``'s image, when it is given)."""
+    d, J = distort_normalised(rays, dist)
+    det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+    if camera is not None:
+        u = camera.K[0, 0] * d[:, 0] + camera.K[0, 2]
+        v = camera.K[1, 1] * d[:, 1] + camera.K[1, 2]
+        det = det[(u >= -0.5) & (u <= camera.width - 0.5) & (v >= -0.5) & (v <= camera.height - 0.5)]
+    return not np.all(det > 0)
 
 
 def check_column_threshold(column_threshold: float, cameras, option: str) -> None:
@@ -124,9 +157,14 @@ def check_column_threshold(column_threshold: float, cameras, option: str) -> Non
 def check_rectifiable(cameras) -> None:
     """Raise the one-line error of :func:`check_lens` or :func:`virtual_extent` for the first
     camera whose lens folds over or that cannot be rectified to a level camera (before any
-    work starts, rather than at the first frame)."""
+    work starts, rather than at the first frame). A lens is checked once for all the cameras
+    that share it (the lab's 16: 0.06 -> 0.03 s)."""
+    lenses = set()
     for camera in cameras:
-        check_lens(camera)
+        lens = (camera.K.tobytes(), camera.dist.tobytes(), camera.width, camera.height)
+        if lens not in lenses:
+            check_lens(camera)
+            lenses.add(lens)
         virtual_extent(camera)
 
 

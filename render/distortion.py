@@ -5,7 +5,8 @@ distortion pulls the corners of the real image from beyond the ideal frame), the
 resamples it: for every pixel (u_d, v_d) of the distorted output image the map holds
 the ideal pinhole pixel that shows the same ray,
 ``K_canvas @ undistort(K^-1 (u_d, v_d, 1))``. That is ``cv2.undistortPoints`` applied to
-the output pixel grid (an iterative inverse of the distortion model), *not*
+the output pixel grid (an iterative inverse of the distortion model, polished by Newton
+steps where it stops short: :func:`scene.camera.undistort_points`), *not*
 ``cv2.initUndistortRectifyMap``, whose map goes the other way (for each undistorted
 pixel, where it lies in the distorted image). With this map a world point projected
 by ``cv2.projectPoints(K, dist)`` lands on its rendered image.
@@ -24,6 +25,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from scene.camera import undistort_points
 from scene.checks import check_array
 
 
@@ -65,9 +67,8 @@ def ideal_pixels(K, dist, width: int, height: int) -> np.ndarray:
     K = check_array("K", K, (3, 3))
     dist = check_array("dist", dist, (5,))
     v, u = np.mgrid[0:height, 0:width].astype(np.float64)
-    pts = np.stack([u.ravel(), v.ravel()], axis=1)[:, None, :]
-    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
-    ideal = cv2.undistortPoints(pts, K, dist, R=None, P=K, criteria=criteria)
+    xy = undistort_points(np.stack([u.ravel(), v.ravel()], axis=1), K, dist)
+    ideal = np.column_stack([xy, np.ones(len(xy))]) @ K[:2].T          # as cv2.undistortPoints(P=K)
     return ideal.reshape(height, width, 2)
 
 

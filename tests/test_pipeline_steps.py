@@ -298,9 +298,10 @@ def rectifiable_cameras(draw):
 
 
 def _world_bearings(cam, uv):
-    """atan2(dy, dx) of the world ray through raw pixels uv (m, 2), distortion removed."""
+    """atan2(dy, dx) of the world ray through raw pixels uv (m, 2), distortion removed
+    (OpenCV's fixed-point iterations, run until they converge: 100 stopped 2.6e-5 px short)."""
     n = cv2.undistortPoints(np.asarray(uv, float).reshape(-1, 1, 2), cam.K, cam.dist, None, None, None,
-                            (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)).reshape(-1, 2)
+                            (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100_000, 1e-12)).reshape(-1, 2)
     d = np.column_stack([n, np.ones(len(n))]) @ cam.R            # R.T @ ray, batched
     return np.arctan2(d[:, 1], d[:, 0])
 

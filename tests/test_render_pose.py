@@ -133,7 +133,6 @@ def small_lenses(draw):
 def test_distortion_map_sends_every_pixel_to_the_canvas_pixel_of_its_ray(lens):
     """Each output pixel reads, on the ideal canvas, the ray that cv2.projectPoints(K, dist)
     sends back to that very pixel; and it reads inside the canvas (no smeared border)."""
-    from pipeline.rectify import ROUND_TRIP
     from render.distortion import distortion_maps
 
     K, dist, w, h = lens
@@ -144,7 +143,7 @@ def test_distortion_map_sends_every_pixel_to_the_canvas_pixel_of_its_ray(lens):
     rays = np.linalg.solve(maps.canvas_K(K), np.column_stack([xy, np.ones(len(xy))]).T).T
     back = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), K, dist)[0].reshape(-1, 2)
     v, u = np.mgrid[0:h, 0:w]
-    # within ROUND_TRIP pixels, what check_lens lets a lens's undistortion miss by:
-    # cv2.undistortPoints's fixed-point iterations stop short in the corners of strong
-    # lenses (0.09 px at a 42-pixel-wide image's corner)
-    np.testing.assert_allclose(back, np.column_stack([u.ravel(), v.ravel()]), atol=ROUND_TRIP)
+    # within 1e-4 px: the undistortion is exact to 1e-9 px (Newton steps after
+    # cv2.undistortPoints, whose iterations alone stopped up to 0.2 px short in these lenses),
+    # the float32 map's rounding is the rest (at most 4.5e-5 px in 3600 such lenses)
+    np.testing.assert_allclose(back, np.column_stack([u.ravel(), v.ravel()]), atol=1e-4)
