@@ -157,7 +157,7 @@ def test_ctrl_c_while_the_workers_import_prints_one_line(tmp_path):
     import psutil
 
     args = [sys.executable, "-m", "testbed.cli", "study", "cameras", "--objects", "1", "--cameras", "4",
-            "--trials", "5", "--workers", "2", "--no-progress"]
+            "--trials", "40", "--workers", "2", "--no-progress"]   # 2 tasks of 20 trials: 2 workers
     proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     me = psutil.Process(proc.pid)
 

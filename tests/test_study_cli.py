@@ -84,9 +84,10 @@ def test_same_numbers_with_two_workers(capsys):
     d = run_json(capsys, *MOVING, "--workers", "2")
     assert c["records"] == d["records"]
     # clustering's k-means: the same twin in this process (OpenMP threads) as in a worker (one)
-    clustering = ("static", "--k", "3", "--taskers", "clustering", "--trials", "4")
-    assert run_json(capsys, *clustering, "--workers", "0")["records"] == \
-        run_json(capsys, *clustering, "--workers", "2")["records"]
+    clustering = ("static", "--k", "3", "--taskers", "clustering", "--trials", "20")   # 2 tasks of 10 trials
+    in_workers = run_json(capsys, *clustering, "--workers", "2")
+    assert in_workers["meta"]["workers"] == 2
+    assert run_json(capsys, *clustering, "--workers", "0")["records"] == in_workers["records"]
 
 
 def test_seed_changes_numbers(capsys):
