@@ -95,19 +95,23 @@ def number_in_name(path: str | os.PathLike, default: int | None = None) -> int |
     return int(m.group(1)) if m else default
 
 
-def read_rgb(path: str | os.PathLike) -> np.ndarray:
-    """(H, W, 3) uint8 RGB image from a file (OpenCV reads BGR; converted here)."""
+def read_rgb(path: str | os.PathLike, name: str = "image") -> np.ndarray:
+    """(H, W, 3) uint8 RGB image from a file (OpenCV reads BGR; converted here).
+
+    name : what the error message starts with (the file's role, or the option naming it)
+    """
     img = cv2.imread(str(path), cv2.IMREAD_COLOR)
     if img is None:
-        raise ValueError(f"image: cannot read {str(path)!r}")
+        raise ValueError(f"{name}: cannot read {str(path)!r}")
     return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
 
 
 def read_labels(path: str | os.PathLike) -> np.ndarray:
-    """(H, W) int label image (0 background) from a PNG (8 or 16 bit, one channel)."""
+    """(H, W) int label image (0 background) from a PNG (8 or 16 bit, one channel): a
+    label mask (``masks/``) or a person's silhouettes (``silhouettes/``)."""
     img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if img is None:
-        raise ValueError(f"mask: cannot read {str(path)!r}")
+        raise ValueError(f"label image: cannot read {str(path)!r}")
     if img.ndim == 3:
         img = img[..., 0]
     return img.astype(np.int32)
@@ -120,13 +124,17 @@ class RenderDir:
     frame_names : sorted frame file names (``NNNNNN.png``) common to all cameras
     """
 
-    def __init__(self, root: str | os.PathLike):
+    def __init__(self, root: str | os.PathLike, name: str = "DIR"):
+        """name : what error messages start with: the argument or option that gave ``root``."""
         self.root = Path(root)
         if not self.root.is_dir():
-            raise FileNotFoundError(f"render directory: no such directory {str(self.root)!r}")
+            if self.root.exists():
+                raise ValueError(f"{name}: {str(self.root)!r} is a file, not a folder (a render directory "
+                                 "written by `camtask render`)")
+            raise FileNotFoundError(f"{name}: no such folder {str(self.root)!r}")
         calib = sorted((self.root / "calibration").glob("cam*.yaml"))
         if not calib:
-            raise ValueError(f"render directory: {self.root} has no calibration/camNN.yaml files")
+            raise ValueError(f"{name}: {self.root} is not a render directory: it has no calibration/camNN.yaml files")
         # numbered as the files (and so the frames/camNN folders) are named
         self.cameras = tuple(load_calibration(p, number_in_name(p)) for p in calib)
         self.names = tuple(c.name for c in self.cameras)
@@ -134,17 +142,17 @@ class RenderDir:
         self.frame_names = tuple(sorted(p.name for p in first.glob("*.png")))
         video = first.with_name(f"{self.names[0]}.mkv")
         if not self.frame_names and video.is_file():
-            raise ValueError(f"render directory: {self.root} holds its frames as video ({video.relative_to(self.root)}, "
+            raise ValueError(f"{name}: {self.root} holds its frames as video ({video.relative_to(self.root)}, "
                              "`camtask render --format video`); this reads PNG frames: render with --format png, "
                              "or decode the videos with testbed.lossless.read_video")
         if not self.frame_names:
-            raise ValueError(f"render directory: {first} has no frames")
-        for name in self.names[1:]:             # frame i is the same moment in every camera
-            other = self.root / "frames" / name
+            raise ValueError(f"{name}: {first} has no frames")
+        for cam in self.names[1:]:              # frame i is the same moment in every camera
+            other = self.root / "frames" / cam
             names = tuple(sorted(p.name for p in other.glob("*.png")))
             if names != self.frame_names:
                 odd = sorted(set(names) ^ set(self.frame_names))
-                raise ValueError(f"render directory: {other} and {first} hold different frames ({len(names)} and "
+                raise ValueError(f"{name}: {other} and {first} hold different frames ({len(names)} and "
                                  f"{len(self.frame_names)}; {odd[0]} is in one only); frames are matched by name")
 
     def __len__(self) -> int:
@@ -175,21 +183,26 @@ class RenderDir:
         return self._stack("masks", [self.root / "masks" / n / f for n in self.names], read_labels)
 
 
-def iter_video_frames(source: str | os.PathLike):
-    """Yield (H, W, 3) uint8 RGB frames of a video file or of a folder of images (sorted)."""
+def iter_video_frames(source: str | os.PathLike, name: str = "--video"):
+    """Yield (H, W, 3) uint8 RGB frames of a video file or of a folder of images (sorted).
+
+    name : what error messages start with: the option that gave ``source``.
+    """
     source = Path(source)
     if source.is_dir():
         files = sorted(p for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
         if not files:
-            raise ValueError(f"video: folder {str(source)!r} has no images")
+            raise ValueError(f"{name}: folder {str(source)!r} has no images ({', '.join(IMAGE_SUFFIXES)})")
         for p in files:
-            yield read_rgb(p)
+            yield read_rgb(p, name)
         return
     if not source.is_file():
-        raise FileNotFoundError(f"video: no such file or folder {str(source)!r}")
+        if source.exists():
+            raise ValueError(f"{name}: {str(source)!r} is neither a video file nor a folder of images")
+        raise FileNotFoundError(f"{name}: no such file or folder {str(source)!r}")
     cap = cv2.VideoCapture(str(source))
     if not cap.isOpened():
-        raise ValueError(f"video: cannot open {str(source)!r}")
+        raise ValueError(f"{name}: cannot open {str(source)!r} as a video")
     try:
         while True:
             ok, frame = cap.read()

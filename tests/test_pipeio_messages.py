@@ -1,0 +1,76 @@
+"""Errors of the pipeline's readers name what the user gave: DIR, --video, or the file."""
+
+import argparse
+import os
+
+import cv2
+import numpy as np
+import pytest
+
+import scene
+from pipeline.io import RenderDir, iter_video_frames, read_labels
+from pipeline.synthetic import synthetic_sequence, write_render_dir
+from testbed.commands import scanlines as scanlines_cmd
+
+
+def camtask(argv):
+    parser = argparse.ArgumentParser(prog="camtask")
+    scanlines_cmd.add_parser(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+@pytest.fixture(scope="module")
+def render_dir(tmp_path_factory):
+    cams = [scene.Camera.from_pose(1, [1.5, 0.05, 2.2], np.radians(70), np.radians(15), 160, 120,
+                                   np.radians(49), [0, 0, 0, 0, 0])]
+    root = tmp_path_factory.mktemp("render")
+    write_render_dir(root, cams, *synthetic_sequence(cams, 2, np.random.default_rng(0)))
+    return root
+
+
+def test_render_dir_errors_name_dir(tmp_path, render_dir):
+    with pytest.raises(FileNotFoundError, match=r"^DIR: no such folder '.*nothere'$"):
+        RenderDir(tmp_path / "nothere")
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(ValueError, match=r"^DIR: '.*afile' is a file, not a folder"):
+        RenderDir(tmp_path / "afile")
+    with pytest.raises(ValueError, match=r"^DIR: .* is not a render directory: it has no calibration/camNN.yaml"):
+        RenderDir(tmp_path)
+    with pytest.raises(FileNotFoundError, match=r"^--dir: no such folder"):
+        RenderDir(tmp_path / "nothere", name="--dir")
+    assert len(RenderDir(render_dir)) == 2
+
+
+def test_scanlines_names_dir(tmp_path):
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(ValueError, match=r"^DIR: '.*afile' is a file, not a folder"):
+        camtask(["scanlines", str(tmp_path / "afile"), "--out", str(tmp_path / "s.npz")])
+
+
+def test_silhouette_that_cannot_be_read_is_not_called_a_mask(tmp_path):
+    path = tmp_path / "silhouettes" / "cam01" / "000000.png"
+    path.parent.mkdir(parents=True)
+    path.write_bytes(b"not a png")
+    with pytest.raises(ValueError, match=r"^label image: cannot read '.*silhouettes/cam01/000000.png'$"):
+        read_labels(path)
+
+
+def test_video_errors_name_the_option(tmp_path):
+    with pytest.raises(FileNotFoundError, match=r"^--video: no such file or folder '.*nothere'$"):
+        next(iter_video_frames(tmp_path / "nothere"))
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ValueError, match=r"^--video: folder '.*empty' has no images \(.png, "):
+        next(iter_video_frames(tmp_path / "empty"))
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "0.png").write_bytes(b"not a png")
+    with pytest.raises(ValueError, match=r"^--video: cannot read '.*bad/0.png'$"):
+        next(iter_video_frames(tmp_path / "bad"))
+    (tmp_path / "clip.mp4").write_text("not a video")
+    with pytest.raises(ValueError, match=r"^--video: cannot open '.*clip.mp4' as a video$"):
+        next(iter_video_frames(tmp_path / "clip.mp4"))
+    os.mkfifo(tmp_path / "pipe")
+    with pytest.raises(ValueError, match=r"^--video: '.*pipe' is neither a video file nor a folder of images$"):
+        next(iter_video_frames(tmp_path / "pipe"))
+    cv2.imwrite(str(tmp_path / "bad" / "0.png"), np.zeros((4, 6, 3), np.uint8))
+    assert next(iter_video_frames(tmp_path / "bad")).shape == (4, 6, 3)
