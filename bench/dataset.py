@@ -40,7 +40,7 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path[0] = str(Path(__file__).resolve().parent.parent)
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))   # this checkout's packages first
 
 def render_only(config, frames: int) -> float:
     """Frames per second of rendering alone, in a worker (renderer from the episode cache)."""

@@ -18,8 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-# bench/pipeline.py and friends would shadow the packages of the same name
-sys.path[0] = str(Path(__file__).resolve().parent.parent)
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))   # this checkout's packages first
 
 
 def main(argv=None) -> int:

@@ -13,11 +13,12 @@ import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-# bench/ holds scripts named like the packages (bench/tasking.py): import the packages.
-sys.path[:] = [p for p in sys.path if os.path.abspath(p or ".") != os.path.dirname(os.path.abspath(__file__))]
+ROOT = str(Path(__file__).resolve().parent.parent)
+sys.path.insert(0, ROOT)                                            # this checkout's packages first
 
 
 def bench_limit(objects: int, seed: int) -> None:
@@ -45,7 +46,8 @@ def bench_study(trials: int, workers: int) -> float:
     argv = [sys.executable, "-c", code, "study", "cameras", "--trials", str(trials),
             "--workers", str(workers), "--json", "--no-progress"]
     t = time.perf_counter()
-    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL)
+    env = os.environ | {"PYTHONPATH": os.pathsep.join(filter(None, (ROOT, os.environ.get("PYTHONPATH"))))}
+    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, env=env)    # this checkout's camtask
     return time.perf_counter() - t
 
 

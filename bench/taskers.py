@@ -4,8 +4,8 @@ Scene: the paper's simulation, a circular room of radius 1 (a 720-gon, as the st
 use), 5 discs of radius 0.1 dropped with seed 0, cameras evenly on the perimeter with a
 180-degree field of view, facing the centre.
 
-    .venv/bin/python bench/tasking.py            # table
-    .venv/bin/python bench/tasking.py --json     # one JSON object
+    .venv/bin/python bench/taskers.py            # table
+    .venv/bin/python bench/taskers.py --json     # one JSON object
 """
 
 from __future__ import annotations
@@ -20,8 +20,7 @@ from pathlib import Path
 import numpy as np
 from shapely.geometry import Polygon
 
-# this file is bench/tasking.py: put the repository first so `tasking` is the package
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))   # this checkout's packages first
 from tasking import choose_cameras, visual_hull_of_discs
 
 R_OBJ = 0.1

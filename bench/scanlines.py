@@ -1,6 +1,6 @@
 """Benchmark: ms per 640x480 frame, production pipeline vs a straightforward reference.
 
-    .venv/bin/python bench/pipeline.py [--dir RENDER_DIR] [--frames N] [--repeat R] [--json]
+    .venv/bin/python bench/scanlines.py [--dir RENDER_DIR] [--frames N] [--repeat R] [--json]
 
 One OpenCV thread (cv2.setNumThreads(1)). Both implementations process the same frames
 of all 16 lab cameras (a render directory, or synthetic lab frames) from the same
@@ -20,7 +20,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))   # this checkout's packages first
 
 import scene
 from pipeline import Pipeline, background_model, load_params

@@ -1,6 +1,6 @@
 """Benchmark one 16-camera render step against the bare OpenGL floor, in one process.
 
-    .venv/bin/python bench/render.py [--steps 10] [--json]
+    .venv/bin/python bench/rendering.py [--steps 10] [--json]
 
 step_ms  : production path, ``Renderer.render``: draw + glReadPixels (RGB and labels in
            one RGBA read) + lens distortion (cv2.remap of the regions the people can
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))   # this checkout's packages first
 
 
 CPU = {}   # per measured function name: process CPU times (all threads, llvmpipe's too), s
