@@ -9,6 +9,7 @@ them could not be read by the other users of a shared machine or cluster.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
 from collections.abc import Iterable
@@ -39,17 +40,36 @@ def temp_folder(parent: str | os.PathLike, prefix: str, suffix: str = ".tmp") ->
     return _create(Path(parent), prefix, suffix, Path.mkdir)[0]
 
 
+def written_file(path: str | os.PathLike) -> Path:
+    """The file that writing ``path`` changes: ``path``, or where the symbolic link ``path``
+    leads (followed to the end; it may not exist yet), as ``open(path, "w")`` would write.
+    A rename onto the link itself would replace the link with a file and leave its target
+    as it was. A loop of links is an OSError."""
+    path = Path(path)
+    if not path.is_symlink():
+        return path
+    target = Path(os.path.realpath(path))
+    if target.is_symlink():                 # realpath stops in a loop
+        error = OSError(f"cannot write {path}: {os.strerror(errno.ELOOP)}")
+        error.errno = errno.ELOOP
+        raise error
+    return target
+
+
 def write_atomic(path: str | os.PathLike, data: bytes | Iterable[bytes]) -> None:
     """Write ``data`` (bytes, or pieces of them in order) to ``path`` through a temporary
-    file in the same folder (made when missing) and ``os.replace``."""
+    file in the same folder (made when missing) and ``os.replace``. A symbolic link is
+    written through: its target is replaced, from a temporary file beside the target
+    (:func:`written_file`)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp, fd = _create(path.parent, f".{path.name}.", ".tmp",
+    target = written_file(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp, fd = _create(target.parent, f".{target.name}.", ".tmp",
                       lambda p: os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data) if isinstance(data, bytes | bytearray | memoryview) else fh.writelines(data)
-        os.replace(tmp, path)
+        os.replace(tmp, target)
     except OSError as exc:                  # a full disk: say which file, as testbed.png does
         tmp.unlink(missing_ok=True)
         error = OSError(f"cannot write {path}: {exc.strerror or exc}")

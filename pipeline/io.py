@@ -21,6 +21,8 @@ import numpy as np
 from scene.camera import Camera
 from scene.checks import check_input_file
 
+from .files import written_file
+
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
 
@@ -215,8 +217,9 @@ def iter_video_frames(source: str | os.PathLike, name: str = "--video"):
 
 def save_npz_atomic(path: str | os.PathLike, **arrays) -> None:
     """``np.savez_compressed`` to a temporary file beside ``path`` (its folder made when
-    missing), then os.replace."""
-    path = Path(path)
+    missing), then os.replace; a symbolic link is written through, as by
+    :func:`pipeline.files.write_atomic`."""
+    path = written_file(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
     try:

@@ -1,0 +1,61 @@
+"""Output files given as symbolic links are written through, atomically beside the target."""
+
+import os
+
+import numpy as np
+import pytest
+
+from pipeline.files import write_atomic
+from pipeline.io import save_npz_atomic
+
+
+@pytest.fixture
+def link(tmp_path):
+    """tmp/out/link.yaml -> ../data/real.yaml (relative, as `ln -s` makes them)."""
+    (tmp_path / "data").mkdir()
+    (tmp_path / "out").mkdir()
+    (tmp_path / "data" / "real.yaml").write_text("old")
+    os.symlink("../data/real.yaml", tmp_path / "out" / "link.yaml")
+    return tmp_path / "out" / "link.yaml"
+
+
+def test_write_atomic_writes_a_link_s_target_and_keeps_the_link(link, tmp_path):
+    write_atomic(link, b"new")
+    assert link.is_symlink() and os.readlink(link) == "../data/real.yaml"
+    assert (tmp_path / "data" / "real.yaml").read_bytes() == b"new"
+    assert sorted(os.listdir(tmp_path / "data")) == ["real.yaml"]       # no temporary left
+    assert sorted(os.listdir(tmp_path / "out")) == ["link.yaml"]
+
+
+def test_write_atomic_through_a_chain_and_a_dangling_link(tmp_path):
+    os.symlink("b", tmp_path / "a")
+    os.symlink("sub/c", tmp_path / "b")
+    write_atomic(tmp_path / "a", b"made")               # as `echo made > a` does, its folder made
+    assert (tmp_path / "a").is_symlink() and (tmp_path / "b").is_symlink()
+    assert (tmp_path / "sub" / "c").read_bytes() == b"made"
+
+
+def test_write_atomic_refuses_a_loop_of_links_in_one_line(tmp_path):
+    os.symlink("b", tmp_path / "a")
+    os.symlink("a", tmp_path / "b")
+    with pytest.raises(OSError, match=r"^cannot write .*a: Too many levels of symbolic links$"):
+        write_atomic(tmp_path / "a", b"x")
+    assert os.readlink(tmp_path / "a") == "b" and sorted(os.listdir(tmp_path)) == ["a", "b"]
+
+
+def test_write_atomic_leaves_the_target_when_writing_fails(link, tmp_path):
+    with pytest.raises(TypeError):
+        write_atomic(link, "not bytes")
+    assert (tmp_path / "data" / "real.yaml").read_text() == "old" and link.is_symlink()
+    assert sorted(os.listdir(tmp_path / "data")) == ["real.yaml"]
+
+
+def test_save_npz_atomic_writes_a_link_s_target(tmp_path):
+    (tmp_path / "data").mkdir()
+    np.savez(tmp_path / "data" / "s.npz", a=np.zeros(1))
+    os.symlink("data/s.npz", tmp_path / "s.npz")
+    save_npz_atomic(tmp_path / "s.npz", a=np.arange(3))
+    assert (tmp_path / "s.npz").is_symlink()
+    with np.load(tmp_path / "data" / "s.npz") as z:
+        assert z["a"].tolist() == [0, 1, 2]
+    assert sorted(os.listdir(tmp_path / "data")) == ["s.npz"]
