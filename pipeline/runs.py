@@ -50,14 +50,26 @@ class RunResult:
 def run_sequence(pipeline: Pipeline, frames: Iterable[np.ndarray],
                  labels: Iterable[np.ndarray] | None = None,
                  progress: Callable[[], None] | None = None) -> RunResult:
-    """Process batches (n_cams, H, W, 3) uint8 in order; labels (n_cams, H, W) int if known."""
+    """Process batches (n_cams, H, W, 3) uint8 in order; labels (n_cams, H, W) int if known,
+    one batch per frame batch.
+
+    A run starts from its first frame: the pipeline's temporal state is reset first (a
+    pipeline reused for a second sequence smoothed its first frames with the last ones of
+    the first). Labels that end before the frames, or go on after them, are a ValueError:
+    they would be compared with other frames than their own.
+    """
+    pipeline.reset()
     scans, gts, counts = [], [], np.zeros((pipeline.n_cams, 4), np.int64)
     labels = iter(labels) if labels is not None else None
+    end = object()
     for batch in frames:
         step = pipeline.step(batch)
         scans.append(step.scanlines)
         if labels is not None:
-            mask, gt = pipeline.ground_truth(next(labels))
+            lab = next(labels, end)
+            if lab is end:
+                raise ValueError(f"labels: ended after {len(scans) - 1} batches, before the frames; expected one per frame")
+            mask, gt = pipeline.ground_truth(lab)
             gts.append(gt)
             c = confusion(step.foreground, mask, axis=(1, 2))
             counts += np.stack([c["tp"], c["fp"], c["fn"], c["tn"]], 1)
@@ -65,6 +77,8 @@ def run_sequence(pipeline: Pipeline, frames: Iterable[np.ndarray],
             progress()
     if not scans:
         raise ValueError("frames: expected at least one frame after the background")
+    if labels is not None and next(labels, end) is not end:
+        raise ValueError(f"labels: more batches than the {len(scans)} frames; expected one per frame")
     return RunResult(np.stack(scans), np.stack(gts) if gts else None, pipeline.bearings,
                      counts if labels is not None else None)
 
