@@ -11,6 +11,7 @@ Render directory layout (written by ``camtask render``)::
 
 from __future__ import annotations
 
+import io
 import os
 import re
 from pathlib import Path
@@ -21,7 +22,7 @@ import numpy as np
 from scene.camera import Camera
 from scene.checks import check_input_file
 
-from .files import written_file
+from .files import write_atomic
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
@@ -216,15 +217,9 @@ def iter_video_frames(source: str | os.PathLike, name: str = "--video"):
 
 
 def save_npz_atomic(path: str | os.PathLike, **arrays) -> None:
-    """``np.savez_compressed`` to a temporary file beside ``path`` (its folder made when
-    missing), then os.replace; a symbolic link is written through, as by
-    :func:`pipeline.files.write_atomic`."""
-    path = written_file(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
-    try:
-        np.savez_compressed(tmp, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    """``np.savez_compressed`` of ``arrays`` written by :func:`pipeline.files.write_atomic`:
+    a temporary file beside ``path`` (its folder made when missing), then os.replace; a
+    symbolic link written through; an error writing names the file."""
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **arrays)
+    write_atomic(path, buffer.getbuffer())

@@ -59,3 +59,13 @@ def test_save_npz_atomic_writes_a_link_s_target(tmp_path):
     with np.load(tmp_path / "data" / "s.npz") as z:
         assert z["a"].tolist() == [0, 1, 2]
     assert sorted(os.listdir(tmp_path / "data")) == ["s.npz"]
+
+
+def test_save_npz_atomic_names_the_file_it_cannot_write(tmp_path, monkeypatch):
+    def full(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "replace", full)
+    with pytest.raises(OSError, match=r"^cannot write .*s.npz: No space left on device$"):
+        save_npz_atomic(tmp_path / "s.npz", a=np.arange(3))
+    assert os.listdir(tmp_path) == []
