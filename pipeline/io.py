@@ -27,27 +27,28 @@ from .files import write_atomic
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
 
 
-def load_calibration(path: str | os.PathLike, number: int | None = None) -> Camera:
+def load_calibration(path: str | os.PathLike, number: int | None = None, name: str = "calibration") -> Camera:
     """A :class:`Camera` from an OpenCV calibration file (YAML/XML, FileStorage).
 
     number : camera number; by default the file's ``camera_number`` (``camtask render``
     writes it), else ``camNN`` in the file name, else 1.
+    name : what the messages call the file (the option that gave it: ``--calibration``).
     Every problem is a one-line ValueError naming the file and the key.
     """
-    path = check_input_file("calibration", path)
+    path = check_input_file(name, path)
     try:
         fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
         opened = fs.isOpened()
     except (cv2.error, SystemError):
         opened = False
     if not opened:
-        raise ValueError(f"calibration: {path.name} is not an OpenCV FileStorage file (YAML or XML "
+        raise ValueError(f"{name}: {path.name} is not an OpenCV FileStorage file (YAML or XML "
                          "with camera_matrix, distortion_coefficients, rvec, tvec, image_width, image_height)")
     try:
         def node(key, required=True):
             n = fs.getNode(key)
             if n.empty() and required:
-                raise ValueError(f"calibration: {path.name} has no {key!r}")
+                raise ValueError(f"{name}: {path.name} has no {key!r}")
             return None if n.empty() else n
 
         def matrix(key, size):
@@ -58,7 +59,7 @@ def load_calibration(path: str | os.PathLike, number: int | None = None) -> Came
                 m = n.real() if n.isReal() or n.isInt() else n.mat()
             m = None if m is None else np.asarray(m, float).ravel()
             if m is None or (size is not None and m.size != size) or not np.all(np.isfinite(m)):
-                raise ValueError(f"calibration: {path.name} {key}: expected {size or 'up to 5'} finite numbers")
+                raise ValueError(f"{name}: {path.name} {key}: expected {size or 'up to 5'} finite numbers")
             return m
 
         def integer(key, required=True):
@@ -66,7 +67,7 @@ def load_calibration(path: str | os.PathLike, number: int | None = None) -> Came
             if n is None:
                 return None
             if not n.isInt():
-                raise ValueError(f"calibration: {path.name} {key}: expected an integer")
+                raise ValueError(f"{name}: {path.name} {key}: expected an integer")
             return int(n.real())
 
         K = matrix("camera_matrix", 9).reshape(3, 3)
@@ -80,7 +81,7 @@ def load_calibration(path: str | os.PathLike, number: int | None = None) -> Came
         dist = np.concatenate([dist, np.zeros(5 - dist.size)])
     elif dist.size > 5:
         if np.any(dist[5:] != 0):
-            raise ValueError(f"calibration: {path.name} distortion_coefficients: expected at most 5 "
+            raise ValueError(f"{name}: {path.name} distortion_coefficients: expected at most 5 "
                              f"(k1 k2 p1 p2 k3), got {dist.size} non-zero")
         dist = dist[:5]
     if number is None:
@@ -89,7 +90,7 @@ def load_calibration(path: str | os.PathLike, number: int | None = None) -> Came
     try:
         return Camera(number, K, dist, R, tvec, width, height)
     except ValueError as exc:
-        raise ValueError(f"calibration: {path.name}: {exc}") from None
+        raise ValueError(f"{name}: {path.name}: {exc}") from None
 
 
 def number_in_name(path: str | os.PathLike, default: int | None = None) -> int | None:

@@ -101,3 +101,17 @@ def test_frames_of_another_size_than_the_calibration_name_the_frame_and_both_opt
         camtask(["scanlines", "--video", str(video), "--calibration", calib, "--background", "1",
                  "--out", str(tmp_path / "s.npz")])
     assert not (tmp_path / "s.npz").exists()
+
+
+def test_a_bad_calibration_file_names_the_option(tmp_path, capsys):
+    """`--calibration x` missing or not a calibration said "calibration: ...", not the option."""
+    from testbed import cli
+
+    video = tmp_path / "frames"
+    video.mkdir()
+    (tmp_path / "cam.yaml").write_text("hello\n")
+    for calibration, why in ((tmp_path / "none.yaml", "no such file"), (tmp_path / "cam.yaml", "cam.yaml is not")):
+        assert cli.main(["scanlines", "--video", str(video), "--calibration", str(calibration),
+                         "--background", "1"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"camtask scanlines: error: --calibration: {why}"), err

@@ -157,7 +157,7 @@ def _run_video(args, params) -> int:
 
     if args.background < 1:
         raise ValueError(f"--background: expected an integer >= 1, got {args.background}")
-    cam = load_calibration(args.calibration)
+    cam = load_calibration(args.calibration, name="--calibration")
     source = Path(args.video).resolve()             # "." has a name once resolved
     out = Path(args.out) if args.out is not None else \
         check_output_file("--out", source.with_name(f"{source.stem}_scanlines.npz"))
