@@ -206,6 +206,16 @@ class _BadAddress(Exception):
     """An address Dask cannot connect to at all (why, in its own words)."""
 
 
+def wait_for_a_worker(client, scheduler: str) -> None:
+    """Return once the cluster at ``scheduler`` has a worker; while it has none, say so
+    first (one line on stderr): a run on a cluster that no worker has joined yet would
+    otherwise wait without a word."""
+    if not client.scheduler_info().get("workers"):
+        print(f"warning: --scheduler: no worker has joined {scheduler} yet; waiting for one (Ctrl-C stops)",
+              file=sys.stderr)
+        client.wait_for_workers(1)
+
+
 def check_scheduler(address: str, timeout: float) -> None:
     """A one-line ValueError unless a Dask scheduler at ``address`` answers "identity" within
     ``timeout`` seconds. ``Client`` alone waited forever on a port that accepts and never

@@ -183,16 +183,13 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
         remove_unlisted,
         size_text,
     )
-    from testbed.parallel import open_client
+    from testbed.parallel import open_client, wait_for_a_worker
 
     started = False
     try:
         with open_client(workers, args.scheduler) as client:
             if args.scheduler is not None:
-                if not client.scheduler_info().get("workers"):      # checked below, then rendered
-                    print(f"warning: --scheduler: no worker has joined {args.scheduler} yet; waiting for one "
-                          "(Ctrl-C stops)", file=sys.stderr)
-                    client.wait_for_workers(1)
+                wait_for_a_worker(client, args.scheduler)           # checked below, then rendered
                 check_worker_versions(client)
                 check_workers_share(client, out)
             bars = []                                 # resuming reads back every kept episode

@@ -16,7 +16,7 @@ import time
 from testbed.cli import check_seed
 from testbed.commands import plain_help
 from testbed.output import check_output_file
-from testbed.parallel import default_workers, open_client, run_tasks
+from testbed.parallel import default_workers, open_client, run_tasks, wait_for_a_worker
 
 STUDY_HELP = {
     "cameras": "residual vs number of cameras and objects (paper figs 5, 6)",
@@ -95,6 +95,8 @@ def run(args) -> int:
                 client = stack.enter_context(open_client(
                     local_workers(args.workers, len(tasks)) if args.scheduler is None else None, args.scheduler))
                 clients.append(client)
+                if args.scheduler is not None:
+                    wait_for_a_worker(client, args.scheduler)
                 used["workers"] = 0 if client is None else len(client.scheduler_info().get("workers", {}))
             return run_tasks(func, tasks, client=clients[0], workers=0, progress=not args.no_progress,
                              desc=desc, weights=weights)
