@@ -1,11 +1,13 @@
 """``camtask scanlines``: frames to scanlines for a render directory or a video.
 
     camtask scanlines DIR [--params FILE] [--frames N] [--out FILE] [--json]
-    camtask scanlines --video FILE_OR_FOLDER --calibration cam.yaml --background N [--frames N] [--out FILE.npz]
+    camtask scanlines --video FILE_OR_FOLDER --calibration cam.yaml --background N [--params FILE] [--frames N]
+                      [--out FILE.npz] [--json]
 
 A render directory gives ``DIR/scanlines.npz`` (``scanlines``, ``gt_scanlines``
 (n_frames, n_cams, W) bool, ``bearings`` (n_cams, W) float radians, ``camera_numbers``
-(n_cams,) int) and the CDnet metrics of the scanline columns and of the foreground
+(n_cams,) int and, when its people's size is known, ``blind_radius``, ``sight_radius``,
+``gt_blind_radius``, ``gt_sight_radius`` (n_cams,) float metres) and the CDnet metrics of the scanline columns and of the foreground
 pixels. An episode of a dataset written by ``camtask render`` needs ``--out``: the
 dataset's manifest checksums its files. A video (or a folder of images, sorted) gives
 ``scanlines`` (n_frames, 1, W), ``bearings`` (1, W) and ``camera_numbers`` (1,); its
