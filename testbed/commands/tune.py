@@ -52,6 +52,7 @@ def run(args) -> int:
     check_seed(args.seed)
     if args.plot is not None:
         check_output_file("--plot", args.plot, ".png")
+        check_outside_dataset("--plot", args.plot)
     start = load_params(args.params)
     for name, (value, low, high) in outside_space(start).items():
         print(f"warning: --params: {name} {value:g} is outside the searched range {low:g}..{high:g}: the first "
@@ -59,6 +60,9 @@ def run(args) -> int:
     render = RenderDir(episode_dir(Path(args.dir)))
     out = check_output_file("--out", args.out) if args.out is not None else \
         default_output(render.root, "tuned_params.yaml")
+    check_outside_dataset("--out", out)
+    if args.plot is not None and Path(args.plot).resolve() == out.resolve():
+        raise ValueError(f"--out and --plot: both name {out}; expected two files")
     n = min(args.frames, len(render))
     background = render.background()
     frames = np.stack([render.frames(i) for i in range(n)])
@@ -110,3 +114,22 @@ def plot_history(f1, path) -> None:
     ax.grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, path, dpi=100)
+
+
+def check_outside_dataset(option: str, path) -> None:
+    """Refuse ``path`` in the top folder of a dataset written by ``camtask render`` (beside
+    its manifest.json), in one line naming ``option``: there it could replace manifest.json
+    or run_info.json, and a name ``episode_*`` is taken for what a stopped run left, which
+    ``camtask render --resume`` deletes. (Inside an episode, ``check_output_file`` refuses it.)"""
+    from testbed.generate import MANIFEST, read_manifest
+
+    folder = Path(path).resolve().parent
+    if not (folder / MANIFEST).is_file():
+        return
+    try:
+        ours = read_manifest(folder) is not None
+    except ValueError:                      # not a camtask manifest, or a damaged one beside episodes
+        ours = any(p.is_dir() for p in folder.glob("episode_*"))
+    if ours:
+        raise ValueError(f"{option}: {path} is in the dataset {folder}, beside its {MANIFEST} (which `camtask "
+                         "verify` and `camtask render --resume` read); choose a folder outside that dataset")

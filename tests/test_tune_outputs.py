@@ -1,0 +1,57 @@
+"""Where `camtask tune` may write: never over a dataset's own files."""
+
+import json
+
+import numpy as np
+import pytest
+
+from pipeline.synthetic import synthetic_sequence, write_render_dir
+from tests.test_pipeline_cli import camtask, small_cameras
+
+
+@pytest.fixture(scope="module")
+def render_dir(tmp_path_factory):
+    cams = small_cameras()
+    bg, frames, labels = synthetic_sequence(cams, 3, np.random.default_rng(4))
+    root = tmp_path_factory.mktemp("render")
+    write_render_dir(root, cams, bg, frames, labels)
+    return root
+
+
+@pytest.fixture
+def dataset(tmp_path):
+    """A dataset's top folder: a camtask manifest beside an episode."""
+    root = tmp_path / "ds"
+    (root / "episode_0000").mkdir(parents=True)
+    entry = {"index": 0, "name": "episode_0000", "frames": 1, "files": {}}
+    (root / "manifest.json").write_text(json.dumps({"episodes": [entry], "episodes_planned": 1}))
+    (root / "run_info.json").write_text("{}")
+    return root
+
+
+@pytest.mark.parametrize("argv", [
+    ["--out", "{ds}/manifest.json"],                    # the dataset's checksums, replaced by YAML
+    ["--out", "{ds}/run_info.json"],
+    ["--out", "{ds}/episode_best.yaml"],                # taken for a stopped run's: --resume deletes it
+    ["--out", "{tmp}/t.yaml", "--plot", "{ds}/episode_0001.png"],
+])
+def test_an_output_beside_a_datasets_manifest_is_refused(render_dir, dataset, tmp_path, argv):
+    before = {p.name: p.read_bytes() for p in dataset.iterdir() if p.is_file()}
+    argv = ["tune", str(render_dir), "--trials", "1"] + [a.format(ds=dataset, tmp=tmp_path) for a in argv]
+    with pytest.raises(ValueError, match=r"^--(out|plot): .* is in the dataset .*ds, beside its manifest.json"):
+        camtask(argv)
+    assert {p.name: p.read_bytes() for p in dataset.iterdir() if p.is_file()} == before
+    assert not (tmp_path / "t.yaml").exists()
+
+
+def test_a_folder_with_another_manifest_json_is_no_dataset(render_dir, tmp_path):
+    (tmp_path / "manifest.json").write_text('{"name": "a web extension"}')
+    assert camtask(["tune", str(render_dir), "--trials", "1", "--out", str(tmp_path / "t.yaml"), "--json"]) == 0
+    assert (tmp_path / "t.yaml").is_file()
+
+
+def test_out_and_plot_naming_one_file_are_refused(render_dir, tmp_path):
+    with pytest.raises(ValueError, match=r"^--out and --plot: both name .*t.png; expected two files"):
+        camtask(["tune", str(render_dir), "--trials", "1", "--out", str(tmp_path / "t.png"),
+                 "--plot", str(tmp_path / "t.png")])
+    assert list(tmp_path.iterdir()) == []
