@@ -1,0 +1,71 @@
+"""`camtask tune` refuses frames or trials the memory cannot hold, before reading any frame."""
+
+import numpy as np
+import pytest
+
+import pipeline.tuning
+from pipeline.io import RenderDir
+from pipeline.synthetic import synthetic_sequence, write_render_dir
+from testbed.commands import run as run_cmd
+from tests.test_pipeline_cli import camtask, small_cameras
+
+FRAME_BYTES = 2 * (160 * 120 * 3 + 160)         # the two small cameras: RGB and a true scanline
+
+
+@pytest.fixture(scope="module")
+def render_dir(tmp_path_factory):
+    cams = small_cameras()
+    bg, frames, labels = synthetic_sequence(cams, 3, np.random.default_rng(4))
+    root = tmp_path_factory.mktemp("render")
+    write_render_dir(root, cams, bg, frames, labels)
+    return root
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Fail at the first frame read or the first search."""
+    def stop(*args, **kwargs):
+        raise AssertionError("work started")
+    monkeypatch.setattr(RenderDir, "frames", stop)
+    monkeypatch.setattr(pipeline.tuning, "tune", stop)
+
+
+def test_frames_the_memory_cannot_hold_are_refused_first(render_dir, tmp_path, monkeypatch, no_work):
+    monkeypatch.setattr(run_cmd, "available_memory", lambda: 2 * FRAME_BYTES + 100)
+    # --frames 30 of a 3-frame episode: its 3 frames are what is held
+    with pytest.raises(ValueError, match=r"^--frames: 3 frames would hold about .* of memory for the search .*; "
+                                         r"expected at most 2 frames here$"):
+        camtask(["tune", str(render_dir), "--trials", "1", "--out", str(tmp_path / "t.yaml")])
+    assert not (tmp_path / "t.yaml").exists()
+
+
+@pytest.mark.parametrize("trials", ["100000000000000000000", "2000000000"])
+def test_trials_the_memory_cannot_hold_are_refused_first(render_dir, tmp_path, monkeypatch, no_work, trials):
+    monkeypatch.setattr(run_cmd, "available_memory", lambda: 10**10)      # 10 GB
+    with pytest.raises(ValueError, match=rf"^--trials: {trials} trials would hold about .* GB of memory \(Optuna "
+                                         r"keeps every trial\), more than the 10 GB available beside the frames; "
+                                         r"expected at most 624992 trials here$"):
+        camtask(["tune", str(render_dir), "--trials", trials, "--frames", "1", "--out", str(tmp_path / "t.yaml")])
+
+
+def test_frames_are_held_once(tmp_path, monkeypatch):
+    """The frames were read into a list, then stacked: twice their size at the peak."""
+    import tracemalloc
+
+    cams = small_cameras()
+    write_render_dir(tmp_path / "r", cams, *synthetic_sequence(cams, 100, np.random.default_rng(4)))
+    seen = {}
+
+    def tune(cameras, background, frames, *args):
+        seen["frames"], seen["peak"] = frames.nbytes, tracemalloc.get_traced_memory()[1]
+        raise KeyboardInterrupt
+    monkeypatch.setattr(pipeline.tuning, "tune", tune)
+    tracemalloc.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            camtask(["tune", str(tmp_path / "r"), "--trials", "1", "--frames", "100",
+                     "--out", str(tmp_path / "t.yaml"), "--json"])
+    finally:
+        tracemalloc.stop()
+    assert seen["frames"] == 100 * 2 * 160 * 120 * 3
+    assert seen["peak"] < 1.5 * seen["frames"], seen
