@@ -40,7 +40,13 @@ def run(args) -> int:
     )
 
     root = Path(args.dir)
+    if not root.is_dir():
+        what = "not a folder" if root.exists() else "no such folder"
+        raise FileNotFoundError(f"DIR: {root}: {what} (expected a dataset folder written by `camtask render`)")
     m = read_manifest(root)
+    if m is None and root.resolve().name.startswith("episode_") and (root.resolve().parent / MANIFEST).is_file():
+        raise FileNotFoundError(f"DIR: {root} is an episode of the dataset {root.resolve().parent}, whose "
+                                f"{MANIFEST} lists it: verify the dataset (camtask verify {root.resolve().parent})")
     if m is None:
         raise FileNotFoundError(f"DIR: no {MANIFEST} in {root} (expected a folder written by `camtask render`)")
     algorithm = manifest_algorithm(m)
@@ -52,7 +58,12 @@ def run(args) -> int:
             problems = episode_problems(root, entry, algorithm)
             if any(problems.values()):
                 bad.append(entry["name"])
-                tqdm.write(f"{entry['name']}: {problems_text(problems)}", file=sys.stdout)
+                n = len(entry["files"])
+                text = problems_text(problems) if (root / entry["name"]).is_dir() else \
+                    f"folder missing ({n} file{'' if n == 1 else 's'} listed)"
+                if "meta.json" in problems["changed"]:
+                    text += origin(root, entry)
+                tqdm.write(f"{entry['name']}: {text}", file=sys.stdout)
             bar.update(len(entry["files"]))
     left = [p.name for p in unlisted(root, entries)]
     if left:
@@ -65,3 +76,22 @@ def run(args) -> int:
         return 1
     print(f"{root}: {len(entries)} episode{'' if len(entries) == 1 else 's'} intact ({files} files, {algorithm})")
     return 0
+
+
+def origin(root: Path, entry: dict) -> str:
+    """``"; its meta.json is episode 1 of seed 2 (4 frames), not ..."`` when the changed
+    meta.json of ``entry``'s folder describes another episode than the manifest lists (a
+    folder copied from another dataset or episode), else ``""``."""
+    import json
+
+    try:
+        meta = json.loads((root / entry["name"] / "meta.json").read_text())
+        found = tuple(meta[k] for k in ("episode", "seed", "frames"))
+    except (OSError, ValueError, TypeError, KeyError):
+        return ""
+    listed = (entry["index"], entry.get("seed"), entry["frames"])
+    if found == listed:
+        return ""
+    say = lambda e, s, f: f"episode {e} of seed {s} ({f} frame{'' if f == 1 else 's'})"
+    return (f"; its meta.json is {say(*found)}, not {say(*listed)} as listed: "
+            "a folder of another dataset or episode")

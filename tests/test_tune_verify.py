@@ -1,0 +1,79 @@
+"""`camtask verify` says which episode folder is missing or came from elsewhere, and which DIR is not a dataset."""
+
+import json
+import shutil
+
+import pytest
+
+from testbed.cli import main
+from testbed.episodes import checksums
+from testbed.generate import MANIFEST
+
+
+def episode(root, index, seed, frames, payload):
+    """A dataset's episode folder and its manifest entry."""
+    name = f"episode_{index:04d}"
+    folder = root / name
+    folder.mkdir(parents=True)
+    (folder / "meta.json").write_text(json.dumps({"episode": index, "seed": seed, "frames": frames,
+                                                  "spawn_key": [index]}))
+    (folder / "people.csv").write_text(payload)
+    return {"index": index, "name": name, "seed": seed, "spawn_key": [index], "frames": frames,
+            "files": checksums(folder)}
+
+
+def dataset(root, seed):
+    entries = [episode(root, i, seed, 4, f"frame {seed} {i}\n") for i in range(2)]
+    (root / MANIFEST).write_text(json.dumps({"format_version": 2, "checksum": "blake3", "episodes_planned": 2,
+                                             "episodes": entries}))
+    return root
+
+
+def verify(capsys, folder):
+    code = main(["verify", str(folder)])
+    out, err = capsys.readouterr()
+    return code, [x for x in out.splitlines() if x.strip()], err.replace("\r", "\n").splitlines()[-1]
+
+
+def test_a_missing_episode_folder_is_named_as_one(tmp_path, capsys):
+    """It was every listed file one after the other: "229 missing (background/cam01.png, ...)"."""
+    root = dataset(tmp_path / "ds", 1)
+    shutil.rmtree(root / "episode_0001")
+    code, out, _ = verify(capsys, root)
+    assert code == 1 and out[0] == "episode_0001: folder missing (2 files listed)"
+
+
+@pytest.mark.parametrize("source, says", [
+    ("other/episode_0001", "episode 1 of seed 2 (4 frames), not episode 1 of seed 1 (4 frames)"),
+    ("ds/episode_0000", "episode 0 of seed 1 (4 frames), not episode 1 of seed 1 (4 frames)"),
+])
+def test_an_episode_folder_from_elsewhere_is_named_so(tmp_path, capsys, source, says):
+    """All its files "changed": nothing said the folder was another dataset's or episode's."""
+    root, other = dataset(tmp_path / "ds", 1), dataset(tmp_path / "other", 2)
+    copy = tmp_path / "copy"
+    shutil.copytree(tmp_path / source, copy)
+    shutil.rmtree(root / "episode_0001")
+    copy.rename(root / "episode_0001")
+    code, out, _ = verify(capsys, root)
+    assert code == 1 and out[0] == (f"episode_0001: 2 changed (meta.json, people.csv); its meta.json is {says} "
+                                    "as listed: a folder of another dataset or episode")
+    assert other.is_dir()
+
+
+def test_a_changed_meta_json_of_the_same_episode_is_only_changed(tmp_path, capsys):
+    root = dataset(tmp_path / "ds", 1)
+    meta = root / "episode_0000" / "meta.json"
+    meta.write_text(meta.read_text() + " ")
+    assert verify(capsys, root)[:2] == (1, ["episode_0000: 1 changed (meta.json)",
+                                            f"{root}: 1 of 2 episodes differ from manifest.json (episode_0000)"])
+
+
+def test_a_dir_that_is_no_dataset_is_named_for_what_it_is(tmp_path, capsys):
+    root = dataset(tmp_path / "ds", 1)
+    expected = "(expected a dataset folder written by `camtask render`)"
+    lines = {root / "episode_0000": (f"DIR: {root}/episode_0000 is an episode of the dataset {root}, whose "
+                                     f"manifest.json lists it: verify the dataset (camtask verify {root})"),
+             tmp_path / "nowhere": f"DIR: {tmp_path}/nowhere: no such folder {expected}",
+             root / MANIFEST: f"DIR: {root}/manifest.json: not a folder {expected}"}
+    for folder, line in lines.items():
+        assert verify(capsys, folder) == (2, [], f"camtask verify: error: {line}")
