@@ -1,4 +1,4 @@
-"""`camtask tune` refuses frames or trials the memory cannot hold, before reading any frame."""
+"""`camtask tune` refuses, before reading any frame, frames or trials the memory cannot hold and missing files."""
 
 import numpy as np
 import pytest
@@ -69,3 +69,18 @@ def test_frames_are_held_once(tmp_path, monkeypatch):
         tracemalloc.stop()
     assert seen["frames"] == 100 * 2 * 160 * 120 * 3
     assert seen["peak"] < 1.5 * seen["frames"], seen
+
+
+@pytest.mark.parametrize("gone", ["masks/cam02/000002.png", "background/cam01.png"])
+def test_a_missing_file_of_the_frames_used_is_refused_before_reading(render_dir, tmp_path, no_work, gone):
+    import shutil
+
+    root = tmp_path / "r"
+    shutil.copytree(render_dir, root)
+    (root / gone).unlink()
+    with pytest.raises(ValueError, match=rf"^render directory: .*r lacks 1 file of its first 3 frames: {gone}$"):
+        camtask(["tune", str(root), "--trials", "1", "--out", str(tmp_path / "t.yaml")])
+    shutil.copytree(render_dir, tmp_path / "r2")
+    (tmp_path / "r2" / "masks" / "cam02" / "000002.png").unlink()        # not among the frames used
+    with pytest.raises(AssertionError, match="work started"):
+        camtask(["tune", str(tmp_path / "r2"), "--trials", "1", "--frames", "2", "--out", str(tmp_path / "t.yaml")])
