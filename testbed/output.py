@@ -43,6 +43,7 @@ def check_output_file(option: str, path: str | os.PathLike, suffix: str | None =
         raise ValueError(f"{option}: {p} exists and is not a regular file (a device, pipe or socket); "
                          "give a file name")
     check_outside_episodes(option, p)
+    check_outside_dataset(option, p)
     if p.parent.exists() and not p.parent.is_dir():
         raise ValueError(f"{option}: cannot write to {p.parent} (not a folder)")
     with made_folder(option, p.parent, keep=False):
@@ -119,6 +120,25 @@ def episode_of(path: str | os.PathLike, itself: bool = False) -> Path | None:
         if folder.name.startswith("episode_") and (folder.parent / MANIFEST).is_file():
             return folder
     return None
+
+
+def check_outside_dataset(option: str, path) -> None:
+    """Refuse ``path`` in the top folder of a dataset written by ``camtask render`` (beside
+    its manifest.json), in one line naming ``option``: there it could replace manifest.json
+    or run_info.json, and a name ``episode_*`` is taken for what a stopped run left, which
+    ``camtask render --resume`` deletes. (Inside an episode, :func:`check_outside_episodes` refuses it.)"""
+    from testbed.generate import MANIFEST, read_manifest
+
+    folder = Path(path).resolve().parent
+    if not (folder / MANIFEST).is_file():
+        return
+    try:
+        ours = read_manifest(folder) is not None
+    except ValueError:                      # not a camtask manifest, or a damaged one beside episodes
+        ours = any(p.is_dir() for p in folder.glob("episode_*"))
+    if ours:
+        raise ValueError(f"{option}: {path} is in the dataset {folder}, beside its {MANIFEST} (which `camtask "
+                         "verify` and `camtask render --resume` read); choose a folder outside that dataset")
 
 
 def check_outside_episodes(option: str, out: str | os.PathLike) -> None:

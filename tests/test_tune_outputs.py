@@ -1,6 +1,7 @@
 """Where `camtask tune` may write: never over a dataset's own files."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -55,3 +56,20 @@ def test_out_and_plot_naming_one_file_are_refused(render_dir, tmp_path):
         camtask(["tune", str(render_dir), "--trials", "1", "--out", str(tmp_path / "t.png"),
                  "--plot", str(tmp_path / "t.png")])
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", [
+    ["scanlines", "{rd}", "--out", "{ds}/manifest.json"],        # replaced the checksums with an .npz
+    ["run", "lab", "--frames", "1", "--video", "{ds}/episode_run.mp4"],
+    ["study", "static", "--trials", "1", "--plot", "{ds}/run_info.png"],
+])
+def test_every_command_refuses_an_output_beside_a_datasets_manifest(render_dir, dataset, command, capsys):
+    """Not only tune: `scanlines EP --out DS/manifest.json` destroyed the dataset's manifest."""
+    from testbed import cli
+
+    before = {p.name: p.read_bytes() for p in dataset.iterdir() if p.is_file()}
+    assert cli.main([a.format(ds=dataset, rd=render_dir) for a in command]) == 2
+    err = capsys.readouterr().err
+    assert re.match(rf"^camtask {command[0]}: error: --(out|video|plot): .* is in the dataset .*ds, beside its "
+                    r"manifest.json", err), err
+    assert {p.name: p.read_bytes() for p in dataset.iterdir() if p.is_file()} == before

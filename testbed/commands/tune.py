@@ -52,7 +52,6 @@ def run(args) -> int:
     check_seed(args.seed)
     if args.plot is not None:
         check_output_file("--plot", args.plot, ".png")
-        check_outside_dataset("--plot", args.plot)
     start = load_params(args.params)
     for name, (value, low, high) in outside_space(start).items():
         print(f"warning: --params: {name} {value:g} is outside the searched range {low:g}..{high:g}: the first "
@@ -60,7 +59,6 @@ def run(args) -> int:
     render = RenderDir(episode_dir(Path(args.dir)))
     out = check_output_file("--out", args.out) if args.out is not None else \
         default_output(render.root, "tuned_params.yaml")
-    check_outside_dataset("--out", out)
     if args.plot is not None and Path(args.plot).resolve() == out.resolve():
         raise ValueError(f"--out and --plot: both name {out}; expected two files")
     n = min(args.frames, len(render))
@@ -203,22 +201,3 @@ def _decimal(y: float, _=None) -> str:
     m = min(y, 1 - y)
     digits = next(d for d in range(1, 17) if abs(round(y, d) - y) <= 1e-6 * m)
     return f"{y:.{digits}f}"
-
-
-def check_outside_dataset(option: str, path) -> None:
-    """Refuse ``path`` in the top folder of a dataset written by ``camtask render`` (beside
-    its manifest.json), in one line naming ``option``: there it could replace manifest.json
-    or run_info.json, and a name ``episode_*`` is taken for what a stopped run left, which
-    ``camtask render --resume`` deletes. (Inside an episode, ``check_output_file`` refuses it.)"""
-    from testbed.generate import MANIFEST, read_manifest
-
-    folder = Path(path).resolve().parent
-    if not (folder / MANIFEST).is_file():
-        return
-    try:
-        ours = read_manifest(folder) is not None
-    except ValueError:                      # not a camtask manifest, or a damaged one beside episodes
-        ours = any(p.is_dir() for p in folder.glob("episode_*"))
-    if ours:
-        raise ValueError(f"{option}: {path} is in the dataset {folder}, beside its {MANIFEST} (which `camtask "
-                         "verify` and `camtask render --resume` read); choose a folder outside that dataset")
