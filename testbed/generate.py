@@ -25,6 +25,7 @@ import itertools
 import json
 import os
 import platform
+import re
 import shutil
 import socket
 import sys
@@ -423,10 +424,23 @@ def unlisted(out: Path, entries: dict[int, dict]) -> list[Path]:
     episodes and the temporary files of a manifest or run_info.json being rewritten when the
     run was killed, sorted by name."""
     wanted = {episode_name(i) for i in entries}
-    temporary = (".episode_", f".{MANIFEST}.", f".{RUN_INFO}.")
-    return sorted((p for p in Path(out).iterdir() if p.name not in wanted and (
-        p.name.startswith("episode_") or (p.name.startswith(temporary) and p.name.endswith(".tmp")))),
-        key=lambda p: p.name)
+    left = []
+    for p in Path(out).iterdir():
+        if p.name in wanted:
+            continue
+        if _RUN_FOLDER.fullmatch(p.name):                       # an episode, finished or not
+            if p.is_dir() and not p.is_symlink():
+                left.append(p)
+        elif _RUN_FILE.fullmatch(p.name):                       # a manifest or run_info.json being written
+            left.append(p)
+    return sorted(left, key=lambda p: p.name)
+
+
+#: The names a run gives what it writes into ``--out``, apart from the manifest and
+#: run_info.json: only these are removed as left behind (a file ``episode_best.yaml`` there,
+#: a user's, was deleted by ``--resume``).
+_RUN_FOLDER = re.compile(r"episode_\d{4,}|\.episode_\d{4,}\..+\.tmp")
+_RUN_FILE = re.compile(rf"\.({re.escape(MANIFEST)}|{re.escape(RUN_INFO)})\..+\.tmp")
 
 
 def remove_unlisted(out: Path, entries: dict[int, dict] | None = None) -> None:
