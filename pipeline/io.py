@@ -142,6 +142,12 @@ class RenderDir:
         # numbered as the files (and so the frames/camNN folders) are named
         self.cameras = tuple(load_calibration(p, number_in_name(p)) for p in calib)
         self.names = tuple(c.name for c in self.cameras)
+        uncalibrated = sorted(p for p in (self.root / "frames").glob("cam*")
+                              if p.stem not in self.names and (p.is_dir() or p.suffix == ".mkv"))
+        if uncalibrated:                        # its frames would be left out without a word
+            odd = uncalibrated[0]
+            raise ValueError(f"{name}: {odd.relative_to(self.root)} has no calibration/{odd.stem}.yaml; every "
+                             "camera's frames need its calibration")
         first = self.root / "frames" / self.names[0]
         self.frame_names = tuple(sorted(p.name for p in first.glob("*.png")))
         video = first.with_name(f"{self.names[0]}.mkv")

@@ -74,3 +74,17 @@ def test_video_errors_name_the_option(tmp_path):
         next(iter_video_frames(tmp_path / "pipe"))
     cv2.imwrite(str(tmp_path / "bad" / "0.png"), np.zeros((4, 6, 3), np.uint8))
     assert next(iter_video_frames(tmp_path / "bad")).shape == (4, 6, 3)
+
+
+def test_frames_of_a_camera_without_its_calibration_are_refused(tmp_path):
+    """A render directory whose calibration/cam02.yaml was lost ran on the other cameras,
+    leaving camera 2's frames out without a word."""
+    from tests.test_pipeline_cli import small_cameras
+
+    cams = small_cameras()
+    bg, frames, labels = synthetic_sequence(cams, 1, np.random.default_rng(4))
+    write_render_dir(tmp_path, cams, bg, frames, labels)
+    lost = max((tmp_path / "calibration").glob("cam*.yaml"))
+    lost.unlink()
+    with pytest.raises(ValueError, match=rf"^DIR: frames/{lost.stem} has no calibration/{lost.stem}.yaml; "):
+        RenderDir(tmp_path)
