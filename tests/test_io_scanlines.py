@@ -8,19 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.synthetic import synthetic_sequence, write_render_dir
 from testbed.cli import UsageError
 from testbed.commands import scanlines as scanlines_cmd
-from tests.test_pipeline_cli import camtask, small_cameras
+from tests.test_pipeline_cli import camtask, small_render_dir
 
 
 @pytest.fixture(scope="module")
 def render_dir(tmp_path_factory):
-    cams = small_cameras()
-    bg, frames, labels = synthetic_sequence(cams, 4, np.random.default_rng(3))
-    root = tmp_path_factory.mktemp("render")
-    write_render_dir(root, cams, bg, frames, labels)
-    return root
+    return small_render_dir(tmp_path_factory.mktemp("render"), 4, 3)
 
 
 def video_args(render_dir, background, *extra):

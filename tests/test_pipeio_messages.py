@@ -79,11 +79,9 @@ def test_video_errors_name_the_option(tmp_path):
 def test_frames_of_a_camera_without_its_calibration_are_refused(tmp_path):
     """A render directory whose calibration/cam02.yaml was lost ran on the other cameras,
     leaving camera 2's frames out without a word."""
-    from tests.test_pipeline_cli import small_cameras
+    from tests.test_pipeline_cli import small_render_dir
 
-    cams = small_cameras()
-    bg, frames, labels = synthetic_sequence(cams, 1, np.random.default_rng(4))
-    write_render_dir(tmp_path, cams, bg, frames, labels)
+    small_render_dir(tmp_path, 1, 4)
     lost = max((tmp_path / "calibration").glob("cam*.yaml"))
     lost.unlink()
     with pytest.raises(ValueError, match=rf"^DIR: frames/{lost.stem} has no calibration/{lost.stem}.yaml; "):

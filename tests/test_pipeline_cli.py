@@ -30,6 +30,15 @@ def small_cameras():
             for i, (x, d) in enumerate([(1.5, -20), (5.0, 20)])]
 
 
+def small_render_dir(root, frames: int, seed: int):
+    """``root`` made a render directory of :func:`small_cameras` and ``frames`` synthetic
+    frames drawn with ``seed``; returns it."""
+    cams = small_cameras()
+    bg, images, labels = synthetic_sequence(cams, frames, np.random.default_rng(seed))
+    write_render_dir(root, cams, bg, images, labels)
+    return root
+
+
 @pytest.fixture(scope="module")
 def sequence():
     cams = small_cameras()

@@ -7,18 +7,13 @@ import numpy as np
 import pytest
 
 from pipeline.io import RenderDir
-from pipeline.synthetic import synthetic_sequence, write_render_dir
 from testbed.output import check_output_file
-from tests.test_pipeline_cli import camtask, small_cameras
+from tests.test_pipeline_cli import camtask, small_render_dir
 
 
 @pytest.fixture(scope="module")
 def render_dir(tmp_path_factory):
-    cams = small_cameras()
-    bg, frames, labels = synthetic_sequence(cams, 4, np.random.default_rng(2))
-    root = tmp_path_factory.mktemp("render")
-    write_render_dir(root, cams, bg, frames, labels)
-    return root
+    return small_render_dir(tmp_path_factory.mktemp("render"), 4, 2)
 
 
 @pytest.fixture

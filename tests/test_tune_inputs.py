@@ -7,18 +7,14 @@ import pipeline.tuning
 from pipeline.io import RenderDir
 from pipeline.synthetic import synthetic_sequence, write_render_dir
 from testbed.commands import run as run_cmd
-from tests.test_pipeline_cli import camtask, small_cameras
+from tests.test_pipeline_cli import camtask, small_cameras, small_render_dir
 
 FRAME_BYTES = 2 * (160 * 120 * 3 + 160)         # the two small cameras: RGB and a true scanline
 
 
 @pytest.fixture(scope="module")
 def render_dir(tmp_path_factory):
-    cams = small_cameras()
-    bg, frames, labels = synthetic_sequence(cams, 3, np.random.default_rng(4))
-    root = tmp_path_factory.mktemp("render")
-    write_render_dir(root, cams, bg, frames, labels)
-    return root
+    return small_render_dir(tmp_path_factory.mktemp("render"), 3, 4)
 
 
 @pytest.fixture

@@ -3,20 +3,14 @@
 import json
 import re
 
-import numpy as np
 import pytest
 
-from pipeline.synthetic import synthetic_sequence, write_render_dir
-from tests.test_pipeline_cli import camtask, small_cameras
+from tests.test_pipeline_cli import camtask, small_render_dir
 
 
 @pytest.fixture(scope="module")
 def render_dir(tmp_path_factory):
-    cams = small_cameras()
-    bg, frames, labels = synthetic_sequence(cams, 3, np.random.default_rng(4))
-    root = tmp_path_factory.mktemp("render")
-    write_render_dir(root, cams, bg, frames, labels)
-    return root
+    return small_render_dir(tmp_path_factory.mktemp("render"), 3, 4)
 
 
 @pytest.fixture
