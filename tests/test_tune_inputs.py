@@ -74,7 +74,7 @@ def test_a_missing_file_of_the_frames_used_is_refused_before_reading(render_dir,
     root = tmp_path / "r"
     shutil.copytree(render_dir, root)
     (root / gone).unlink()
-    with pytest.raises(ValueError, match=rf"^render directory: .*r lacks 1 file of its first 3 frames: {gone}$"):
+    with pytest.raises(ValueError, match=rf"^DIR: .*r lacks 1 file of its first 3 frames: {gone}$"):
         camtask(["tune", str(root), "--trials", "1", "--out", str(tmp_path / "t.yaml")])
     shutil.copytree(render_dir, tmp_path / "r2")
     (tmp_path / "r2" / "masks" / "cam02" / "000002.png").unlink()        # not among the frames used

@@ -112,7 +112,7 @@ def check_files(render, frames: int) -> None:
         Path(kind) / c / f for f in render.frame_names[:frames] for kind in ("frames", "masks") for c in render.names]
     missing = [str(p) for p in wanted if not (render.root / p).is_file()]
     if missing:
-        raise ValueError(f"render directory: {render.root} lacks {len(missing)} file{'' if len(missing) == 1 else 's'} "
+        raise ValueError(f"DIR: {render.root} lacks {len(missing)} file{'' if len(missing) == 1 else 's'} "
                          f"of its first {frames} frame{'' if frames == 1 else 's'}: {names(missing)}")
 
 
