@@ -17,7 +17,7 @@ import numpy as np
 import yaml
 
 from . import yamlio
-from .camera import Camera, FloorCamera
+from .camera import FLOOR_FOV_RANGE, Camera, FloorCamera
 from .checks import (
     check_array,
     check_between,
@@ -59,12 +59,6 @@ MAX_RING_CAMERAS = 10_000
 #: widest image (MAX_RESOLUTION) has a focal length of 9.4e5 pixels, 40 times less. At 179
 #: degrees the image's edges look 89.5 degrees off its axis.
 HFOV_RANGE = (1.0, 179.0)
-#: The narrowest and widest field of view of a ring's floor cameras, degrees. They feed only the
-#: tasking geometry, which drops free intervals narrower than 1e-10 radians as rounding noise
-#: (tasking.cones.MIN_GAP, 5.7e-9 degrees): at 1e-9 degrees (and 1e-300) every camera silently
-#: saw nothing, the hull was the whole room and the greedy tasker chose by ties. At 1e-6 a
-#: camera's view is 175 times that: an interval it drops is under 0.6 % of its view.
-RING_FOV_RANGE = (1e-6, 180.0)
 BUILTIN_SCENES = ("lab", "circle")
 BACKENDS = ("egl", "osmesa")
 
@@ -279,7 +273,7 @@ def _parse_ring(cfg: Any, room: Room) -> tuple:
     n = check_int("cameras.ring.count", cfg["count"], minimum=1)
     if n > MAX_RING_CAMERAS:
         raise ValueError(f"cameras.ring.count: expected at most {MAX_RING_CAMERAS} cameras, got {shown(n)}")
-    fov = _check_fov("cameras.ring.fov_deg", cfg["fov_deg"], *RING_FOV_RANGE)
+    fov = _check_fov("cameras.ring.fov_deg", cfg["fov_deg"], *FLOOR_FOV_RANGE)
     radius = float(np.max(np.linalg.norm(room.vertices, axis=1)))
     angles = 2 * np.pi * np.arange(n) / n
     return tuple(

@@ -48,6 +48,19 @@ def test_every_ring_camera_at_the_bounds_proves_its_view_empty(fov_deg):
 
 
 def test_the_narrowest_ring_sees_well_above_the_dropped_intervals():
-    from scene.config import RING_FOV_RANGE
+    from scene.camera import FLOOR_FOV_RANGE
 
-    assert np.radians(RING_FOV_RANGE[0]) > 100 * MIN_GAP
+    assert np.radians(FLOOR_FOV_RANGE[0]) > 100 * MIN_GAP
+
+
+def test_a_floor_camera_made_in_python_is_held_to_the_same_range():
+    """Only scene files were: FloorCamera(fov=1e-12) saw nothing, silently."""
+    import pytest
+
+    from scene.camera import FloorCamera
+
+    FloorCamera(1, [1.0, 0.0], np.pi, np.radians(1e-6))
+    FloorCamera(1, [1.0, 0.0], np.pi, np.pi)
+    for fov in (1e-12, np.radians(1e-7), np.pi + 1e-6):
+        with pytest.raises(ValueError, match=r"^camera.fov: expected a field of view in \[1e-06, 180\] degrees"):
+            FloorCamera(1, [1.0, 0.0], np.pi, fov)
