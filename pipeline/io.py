@@ -126,11 +126,13 @@ class RenderDir:
 
     cameras : tuple of :class:`Camera`, in camera-number order
     frame_names : sorted frame file names (``NNNNNN.png``) common to all cameras
+    name : what its error messages start with (``DIR``)
     """
 
     def __init__(self, root: str | os.PathLike, name: str = "DIR"):
         """name : what error messages start with: the argument or option that gave ``root``."""
         self.root = Path(root)
+        self.name = name
         if not self.root.is_dir():
             if self.root.exists():
                 raise ValueError(f"{name}: {str(self.root)!r} is a file, not a folder (a render directory "
@@ -167,6 +169,18 @@ class RenderDir:
 
     def __len__(self) -> int:
         return len(self.frame_names)
+
+    def check_complete(self, frames: int) -> None:
+        """Refuse, in one line before any frame is read, a render directory that lacks a
+        frame, label image or background of its first ``frames`` frames (one missing at frame
+        250 was found after reading the 249 before it)."""
+        wanted = [Path("background") / f"{c}.png" for c in self.names] + [
+            Path(kind) / c / f for f in self.frame_names[:frames] for kind in ("frames", "masks") for c in self.names]
+        missing = [str(p) for p in wanted if not (self.root / p).is_file()]
+        if missing:
+            listed = ", ".join(missing[:3]) + (f" and {len(missing) - 3} more" if len(missing) > 3 else "")
+            raise ValueError(f"{self.name}: {self.root} lacks {len(missing)} file{'' if len(missing) == 1 else 's'} "
+                             f"of its first {frames} frame{'' if frames == 1 else 's'}: {listed}")
 
     def _stack(self, what: str, paths, reader) -> np.ndarray:
         images = []

@@ -80,3 +80,18 @@ def test_a_missing_file_of_the_frames_used_is_refused_before_reading(render_dir,
     (tmp_path / "r2" / "masks" / "cam02" / "000002.png").unlink()        # not among the frames used
     with pytest.raises(AssertionError, match="work started"):
         camtask(["tune", str(tmp_path / "r2"), "--trials", "1", "--frames", "2", "--out", str(tmp_path / "t.yaml")])
+
+
+def test_scanlines_refuses_a_missing_file_of_the_frames_used_before_reading(render_dir, tmp_path, monkeypatch):
+    """The same check, at the render directory's depth: scanlines found a lost mask only at its frame."""
+    import shutil
+
+    from pipeline import io as pipeline_io
+
+    root = tmp_path / "r"
+    shutil.copytree(render_dir, root)
+    (root / "masks" / "cam01" / "000002.png").unlink()
+    monkeypatch.setattr(pipeline_io.RenderDir, "frames", lambda self, i: pytest.fail("a frame was read"))
+    with pytest.raises(ValueError, match=r"^DIR: .*r lacks 1 file of its first 3 frames: masks/cam01/000002.png$"):
+        camtask(["scanlines", str(root), "--out", str(tmp_path / "s.npz")])
+    assert not (tmp_path / "s.npz").exists()

@@ -80,6 +80,7 @@ def _run_render(args, params) -> int:
     render = RenderDir(episode_dir(Path(args.dir)))
     out = Path(args.out) if args.out is not None else default_output(render.root, "scanlines.npz")
     n = len(render) if args.frames is None else min(args.frames, len(render))
+    render.check_complete(n)
     size = people_size(render.root)                 # before the frames: a bad people.csv stops at once
     pipe = Pipeline(render.cameras, params, render.background())
     with tqdm(total=n, desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:

@@ -63,7 +63,7 @@ def run(args) -> int:
         raise ValueError(f"--out and --plot: both name {out}; expected two files")
     n = min(args.frames, len(render))
     check_memory(render.cameras, n, args.trials)
-    check_files(render, n)
+    render.check_complete(n)
     background = render.background()
     pipe = Pipeline(render.cameras, start)
     frames, gt = None, []
@@ -100,20 +100,6 @@ def run(args) -> int:
         for k, v in result.best.to_dict().items():
             print(f"  {k}: {v:.4g}" if isinstance(v, float) else f"  {k}: {v}")
     return 0
-
-
-def check_files(render, frames: int) -> None:
-    """Refuse, in one line before any frame is read, a render directory that lacks a frame,
-    label image or background of its first ``frames`` frames (one missing at frame 250 was
-    found after reading the 249 before it)."""
-    from testbed.generate import names
-
-    wanted = [Path("background") / f"{c}.png" for c in render.names] + [
-        Path(kind) / c / f for f in render.frame_names[:frames] for kind in ("frames", "masks") for c in render.names]
-    missing = [str(p) for p in wanted if not (render.root / p).is_file()]
-    if missing:
-        raise ValueError(f"DIR: {render.root} lacks {len(missing)} file{'' if len(missing) == 1 else 's'} "
-                         f"of its first {frames} frame{'' if frames == 1 else 's'}: {names(missing)}")
 
 
 #: Memory an Optuna trial holds until the search ends, bytes: the process grew by 32 MB
