@@ -22,7 +22,9 @@ when complete, so a half-written episode never exists.
 
 from __future__ import annotations
 
+import json
 import os
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -72,6 +74,36 @@ def read_calibration(path: str | os.PathLike) -> dict:
         }
     finally:
         fs.release()
+
+
+def read_meta(episode: str | os.PathLike, complete: bool = True) -> dict:
+    """An episode's meta.json, refused in one line naming the file and the key unless it
+    is a JSON object with (when ``complete``) ``cameras`` (distinct integers >= 1),
+    ``frames`` (>= 1), ``people`` (>= 0) and ``scene_yaml`` (text), as ``camtask render``
+    writes it."""
+    from scene.checks import read_input_text
+
+    path = Path(episode) / "meta.json"
+    try:
+        meta = json.loads(read_input_text("meta.json", path))
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"{path}: expected a JSON object, got {type(meta).__name__}")
+    if not complete:
+        return meta
+    count = lambda v, low: isinstance(v, int) and not isinstance(v, bool) and v >= low
+    for key, ok, what in (
+            ("cameras", lambda v: isinstance(v, list) and v and all(count(n, 1) for n in v) and len(set(v)) == len(v),
+             "a non-empty list of distinct camera numbers >= 1"),
+            ("frames", lambda v: count(v, 1), "an integer >= 1"),
+            ("people", lambda v: count(v, 0), "an integer >= 0"),
+            ("scene_yaml", lambda v: isinstance(v, str), "the scene file's text")):
+        if key not in meta:
+            raise ValueError(f"{path}: no {key!r} (expected {what})")
+        if not ok(meta[key]):
+            raise ValueError(f"{path}: {key}: expected {what}, got {json.dumps(meta[key])[:60]}")
+    return meta
 
 
 def read_people(path: str | os.PathLike) -> np.ndarray:

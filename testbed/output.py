@@ -125,8 +125,8 @@ def episode_of(path: str | os.PathLike, itself: bool = False) -> Path | None:
 def check_outside_dataset(option: str, path) -> None:
     """Refuse ``path`` in the top folder of a dataset written by ``camtask render`` (beside
     its manifest.json), in one line naming ``option``: there it could replace manifest.json
-    or run_info.json, and a name ``episode_*`` is taken for what a stopped run left, which
-    ``camtask render --resume`` deletes. (Inside an episode, :func:`check_outside_episodes` refuses it.)"""
+    or run_info.json, or take an episode's name. (Inside an episode,
+    :func:`check_outside_episodes` refuses it.)"""
     from testbed.generate import MANIFEST, read_manifest
 
     folder = Path(path).resolve().parent

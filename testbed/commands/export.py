@@ -41,9 +41,10 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
+    from testbed.dataset import read_meta
     from testbed.episodes import episode_name
     from testbed.generate import MANIFEST
-    from testbed.wildtrack import export_episode, people_table, read_calibrations, read_meta
+    from testbed.wildtrack import export_episode, people_table, read_calibrations
 
     root = Path(args.dir)
     index = 0 if args.episode is None else args.episode

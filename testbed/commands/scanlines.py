@@ -109,15 +109,11 @@ def people_size(root: Path) -> tuple[float, float] | None:
         if table.size:
             return float(np.min(table["height"])), 2 * float(np.min(table["radius"]))
     if (root / "meta.json").is_file():
-        import json
-
         from scene import Scene
+        from testbed.dataset import read_meta
 
-        try:
-            meta = json.loads((root / "meta.json").read_text())
-        except ValueError as exc:
-            raise ValueError(f"{root / 'meta.json'}: not valid JSON ({exc})") from None
-        if isinstance(meta, dict) and meta.get("scene_yaml"):
+        meta = read_meta(root, complete=False)
+        if meta.get("scene_yaml"):
             people = Scene.from_text(meta["scene_yaml"], str(root / "meta.json")).people
             return float(people.height), 2 * float(people.radius)
     return None
