@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from scene.camera import Camera
-from scene.checks import check_input_file
+from scene.checks import check_input_file, names
 
 from .files import write_atomic
 
@@ -178,9 +178,8 @@ class RenderDir:
             Path(kind) / c / f for f in self.frame_names[:frames] for kind in ("frames", "masks") for c in self.names]
         missing = [str(p) for p in wanted if not (self.root / p).is_file()]
         if missing:
-            listed = ", ".join(missing[:3]) + (f" and {len(missing) - 3} more" if len(missing) > 3 else "")
             raise ValueError(f"{self.name}: {self.root} lacks {len(missing)} file{'' if len(missing) == 1 else 's'} "
-                             f"of its first {frames} frame{'' if frames == 1 else 's'}: {listed}")
+                             f"of its first {frames} frame{'' if frames == 1 else 's'}: {names(missing)}")
 
     def _stack(self, what: str, paths, reader) -> np.ndarray:
         images = []

@@ -66,6 +66,16 @@ def shown(value: Any) -> str:
     return repr(value)
 
 
+def names(paths: list[str], most: int = 3) -> str:
+    """``a, b, c`` or ``a, b, c and 4 more``, for one-line messages.
+
+    >>> names(["a", "b"]), names(list("abcde"))
+    ('a, b', 'a, b, c and 2 more')
+    """
+    shown = ", ".join(paths[:most])
+    return shown if len(paths) <= most else f"{shown} and {len(paths) - most} more"
+
+
 def _number(name: str, value: Any) -> float:
     """``value`` as a float; booleans and strings are not numbers here. An integer beyond
     the float range is an infinity (refused as not finite, by the checks that need it)."""

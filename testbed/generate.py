@@ -34,6 +34,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from scene.checks import names
 from testbed.checksum import ALGORITHM, ALGORITHMS
 from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode
 from testbed.output import PROBE  # the files check_out and check_workers_share make and remove
@@ -251,16 +252,6 @@ def refuse_foreign(folder: Path | str, others: list[str], marker: str, what: str
     if why is not None:
         raise FileExistsError(f"{flag}: {folder} is not {what} ({why}; it holds {names(others)}); "
                               "empty it yourself or choose another folder")
-
-
-def names(paths: list[str], most: int = 3) -> str:
-    """``a, b, c`` or ``a, b, c and 4 more``, for one-line messages.
-
-    >>> names(["a", "b"]), names(list("abcde"))
-    ('a, b', 'a, b, c and 2 more')
-    """
-    shown = ", ".join(paths[:most])
-    return shown if len(paths) <= most else f"{shown} and {len(paths) - most} more"
 
 
 #: Bytes on disk per camera frame, as a fraction of its raw RGB size (W x H x 3): the noisy

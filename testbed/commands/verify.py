@@ -29,11 +29,11 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
+    from scene.checks import names
     from testbed.generate import (
         MANIFEST,
         episode_problems,
         manifest_algorithm,
-        names,
         problems_text,
         read_manifest,
         unlisted,
