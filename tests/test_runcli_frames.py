@@ -3,7 +3,7 @@ it, before the walk (which took hours for 10**8 frames, then the results filled 
 
 import pytest
 
-from testbed import cli
+from testbed import cli, memory
 from testbed.commands import run as run_command
 
 
@@ -19,7 +19,7 @@ def test_frames_beyond_any_memory_are_refused_naming_the_flag(command, tmp_path,
 
 
 def test_the_bound_follows_the_memory_available_cameras_and_people(monkeypatch, capsys):
-    monkeypatch.setattr(run_command, "available_memory", lambda: 2_000_000_000)
+    monkeypatch.setattr(memory, "available_memory", lambda: 2_000_000_000)
     per_frame = run_command.FRAME_BYTES + 6 * run_command.CAMERA_BYTES + 3 * run_command.PERSON_BYTES
     most = 2_000_000_000 // per_frame
     run_command.check_frames_fit(most, 6, 3)
@@ -36,7 +36,7 @@ def test_the_bound_follows_the_memory_available_cameras_and_people(monkeypatch, 
 def test_study_lab_refuses_a_trial_longer_than_the_memory(monkeypatch, capsys):
     """Each lab trial keeps every camera's scanlines: --frames 10**8 sat at 0/1 trials for
     hours, then filled the memory."""
-    monkeypatch.setattr(run_command, "available_memory", lambda: 2_000_000_000)
+    monkeypatch.setattr(memory, "available_memory", lambda: 2_000_000_000)
     assert cli.main(["study", "lab", "--frames", str(10**8), "--trials", "1", "--workers", "0"]) == 2
     err = capsys.readouterr().err
     per_frame = 2 * 16 * 640 + 16 * 3

@@ -6,7 +6,7 @@ import pytest
 import pipeline.tuning
 from pipeline.io import RenderDir
 from pipeline.synthetic import synthetic_sequence, write_render_dir
-from testbed.commands import run as run_cmd
+from testbed import memory
 from tests.test_pipeline_cli import camtask, small_cameras, small_render_dir
 
 FRAME_BYTES = 2 * (160 * 120 * 3 + 160)         # the two small cameras: RGB and a true scanline
@@ -27,7 +27,7 @@ def no_work(monkeypatch):
 
 
 def test_frames_the_memory_cannot_hold_are_refused_first(render_dir, tmp_path, monkeypatch, no_work):
-    monkeypatch.setattr(run_cmd, "available_memory", lambda: 2 * FRAME_BYTES + 100)
+    monkeypatch.setattr(memory, "available_memory", lambda: 2 * FRAME_BYTES + 100)
     # --frames 30 of a 3-frame episode: its 3 frames are what is held
     with pytest.raises(ValueError, match=r"^--frames: 3 frames would hold about .* of memory for the search .*; "
                                          r"expected at most 2 frames here$"):
@@ -37,7 +37,7 @@ def test_frames_the_memory_cannot_hold_are_refused_first(render_dir, tmp_path, m
 
 @pytest.mark.parametrize("trials", ["100000000000000000000", "2000000000"])
 def test_trials_the_memory_cannot_hold_are_refused_first(render_dir, tmp_path, monkeypatch, no_work, trials):
-    monkeypatch.setattr(run_cmd, "available_memory", lambda: 10**10)      # 10 GB
+    monkeypatch.setattr(memory, "available_memory", lambda: 10**10)      # 10 GB
     with pytest.raises(ValueError, match=rf"^--trials: {trials} trials would hold about .* GB of memory \(Optuna "
                                          r"keeps every trial\), more than the 10 GB available beside the frames; "
                                          r"expected at most 624992 trials here$"):

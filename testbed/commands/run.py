@@ -49,38 +49,15 @@ FRAME_BYTES, CAMERA_BYTES, PERSON_BYTES = 8000, 1000, 1000 + 16
 WALK_BAR_DELAY = 1.0
 
 
-def available_memory() -> int:
-    """Bytes of memory this machine can give a process now without swapping."""
-    import psutil
-
-    return psutil.virtual_memory().available
-
-
 def check_frames_fit(frames: int, k: int, people: int, option: str = "--frames") -> None:
     """Raise a one-line ValueError naming ``option`` when ``frames`` frames of ``k`` tasked
     cameras and ``people`` people would hold more memory than is available now (before the
-    walk: --frames 10**8 walked for hours, then filled the memory frame by frame)."""
-    check_frames_memory(frames, FRAME_BYTES + CAMERA_BYTES * k + PERSON_BYTES * people,
-                        "until the run ends (the walk and each frame's results, for the summary)", option)
+    walk: --frames 10**8 walked for hours, then filled the memory frame by frame). The
+    renderer's ~1 GB, whatever ``frames``, is not counted."""
+    from testbed.memory import check_fits
 
-
-def check_frames_memory(frames: int, per_frame: int, held: str, option: str = "--frames") -> None:
-    """Raise a one-line ValueError naming ``option`` when ``frames`` times ``per_frame``
-    bytes, held as ``held`` says, are more than the memory available now (the fixed part,
-    ~1 GB for a renderer whatever ``frames``, is not counted)."""
-    free = available_memory()
-    need = frames * per_frame
-    if need > free:
-        raise ValueError(f"{option}: {frames} frames would hold about {_gigabytes(need)} of memory {held}, more "
-                         f"than the {_gigabytes(free)} available; expected at most {free // per_frame} frames here")
-
-
-def _gigabytes(n: float) -> str:
-    """
-    >>> _gigabytes(24.6e9), _gigabytes(1.71e12), _gigabytes(3e8)
-    ('24.6 GB', '1,710 GB', '0.3 GB')
-    """
-    return f"{n / 1e9:.3g} GB" if n < 1e12 else f"{n / 1e9:,.0f} GB"
+    check_fits(option, frames, "frames", FRAME_BYTES + CAMERA_BYTES * k + PERSON_BYTES * people,
+               "until the run ends (the walk and each frame's results, for the summary)")
 
 
 def prepare(args):

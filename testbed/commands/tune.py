@@ -111,15 +111,12 @@ def check_memory(cameras, frames: int, trials: int) -> None:
     """Refuse, in one line before any frame is read, ``frames`` frames of ``cameras`` (held
     in memory for every trial) or ``trials`` trials (Optuna keeps each) that the memory
     available now cannot hold."""
-    from testbed.commands.run import _gigabytes, available_memory, check_frames_memory
+    from testbed.memory import check_fits
 
     per_frame = sum(c.width * c.height * 3 + c.width for c in cameras)     # RGB, true scanline
-    check_frames_memory(frames, per_frame, "for the search (every trial runs on all of them)")
-    free = available_memory() - frames * per_frame
-    if trials * TRIAL_BYTES > free:
-        raise ValueError(f"--trials: {trials} trials would hold about {_gigabytes(trials * TRIAL_BYTES)} of memory "
-                         f"(Optuna keeps every trial), more than the {_gigabytes(free)} available beside the frames; "
-                         f"expected at most {free // TRIAL_BYTES} trials here")
+    check_fits("--frames", frames, "frames", per_frame, "for the search (every trial runs on all of them)")
+    check_fits("--trials", trials, "trials", TRIAL_BYTES, "(Optuna keeps every trial)", reserved=frames * per_frame,
+               beside=" beside the frames")
 
 
 #: The plot's F1 axis runs over this range at most (a logit scale: 0 and 1 are infinitely

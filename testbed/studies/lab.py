@@ -40,8 +40,8 @@ def parse(args) -> dict:
     from pipeline import load_params
     from pipeline.rectify import check_column_threshold
     from scene import load_scene
-    from testbed.commands.run import check_frames_memory
     from testbed.episode import check_people_renderable, check_renderable, with_people
+    from testbed.memory import check_fits
 
     scene = with_people(load_scene(args.scene), args.people)
     check_renderable(scene, "--scene")
@@ -54,8 +54,8 @@ def parse(args) -> dict:
     core.check_m(args.m, ks if "incremental" in taskers else [])
     check_column_threshold(load_params(args.params).column_threshold, scene.cameras, "--params")
     # a trial keeps every camera's scanline of every frame (stacked: twice, for a moment)
-    check_frames_memory(args.frames, 2 * sum(c.width for c in scene.cameras) + 16 * args.people,
-                        "in each trial (every camera's scanlines of every frame)")
+    check_fits("--frames", args.frames, "frames", 2 * sum(c.width for c in scene.cameras) + 16 * args.people,
+               "in each trial (every camera's scanlines of every frame)")
     return {"scene": args.scene, "people": args.people, "k": ks, "taskers": taskers,
             "frames": args.frames, "m": args.m, "update_every": args.update_every, "params": args.params,
             "near_field": args.near_field}
