@@ -15,7 +15,9 @@ import io
 import os
 import signal
 import sys
-import threading
+
+from testbed import stops
+from testbed.stops import Terminated
 
 #: Command modules, in the order ``camtask --help`` lists them.
 COMMANDS = (
@@ -60,15 +62,6 @@ def build_parser() -> argparse.ArgumentParser:
     for name in COMMANDS:
         importlib.import_module(name).add_parser(sub)
     return parser
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (``kill``, a batch scheduler's time limit), raised where Ctrl-C would be, so a
-    run stops as cleanly: temporary folders removed, the manifest listing what finished."""
-
-
-def _terminate(signum, frame) -> None:
-    raise Terminated
 
 
 def _interruption(exc: BaseException) -> KeyboardInterrupt | None:
@@ -122,13 +115,8 @@ def main(argv: list[str] | None = None) -> int:
     # SIGTERM is caught from the first line on: importing the commands (numpy, OpenCV,
     # shapely) takes 0.3-1.2 s, and a `kill` meanwhile ended the process without a word.
     # This module imports nothing heavy at its top for the same reason.
-    in_main = threading.current_thread() is threading.main_thread()     # where signal handlers run
-    previous = signal.signal(signal.SIGTERM, _terminate) if in_main else None
-    try:
+    with stops.handled():          # recorded too: a Ctrl-C that lands in a finalizer is not lost
         return _dispatch(argv)
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
 
 
 def _dispatch(argv: list[str] | None) -> int:

@@ -35,6 +35,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from scene.checks import names
+from testbed import stops
 from testbed.checksum import ALGORITHM, ALGORITHMS
 from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode
 from testbed.output import PROBE  # the files check_out and check_workers_share make and remove
@@ -607,6 +608,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
             try:
                 top_up()
                 while pending:
+                    stops.check()                   # a Ctrl-C that a future's finalizer swallowed
                     ready.clear()                   # an episode ending from here on wakes the wait below
                     for index in [i for i, f in pending.items() if f.done()]:
                         entry, host, secs = pending[index].result()    # re-raises the episode's error

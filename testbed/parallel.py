@@ -29,6 +29,8 @@ from typing import Any
 
 from tqdm import tqdm
 
+from testbed import stops
+
 __all__ = ["chunk", "default_workers", "open_client", "run_tasks"]
 
 
@@ -299,6 +301,7 @@ def _run_on(client, func, tasks, w, bar) -> list:
     results: list = [None] * len(tasks)
     try:
         for fut in as_completed(futures):
+            stops.check()                       # a Ctrl-C that a future's finalizer swallowed
             i = index[fut.key]
             results[i] = fut.result()
             bar.update(w[i])

@@ -1,0 +1,72 @@
+"""Ctrl-C and SIGTERM that no finalizer can swallow.
+
+Python raises a signal's exception in whatever Python code runs when it comes, a
+finalizer (``__del__``) too, where it is printed as "Exception ignored in ..." and
+lost: a Ctrl-C that landed in a Dask future's ``__del__`` (run when an episode's future
+is dropped) let the render go on to finish and exit 0. The handlers here also record the
+signal, and the loops that wait for work call :func:`check`, which raises it again;
+the finalizer's "Exception ignored" traceback is not printed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import sys
+import threading
+from collections.abc import Iterator
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a batch scheduler's time limit), raised where Ctrl-C would be, so a
+    run stops as cleanly: temporary folders removed, the manifest listing what finished."""
+
+
+#: The signals that came while :func:`handled` was in place (cleared when it ends).
+_came: list[int] = []
+
+
+def _stop(signum: int) -> KeyboardInterrupt:
+    return Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def _handler(signum, frame) -> None:
+    _came.append(signum)
+    raise _stop(signum)
+
+
+def _unraisable(hook):
+    """``sys.unraisablehook`` that keeps quiet about a recorded signal's exception (it is
+    raised again at the next :func:`check`, and the command says so in one line)."""
+    def quiet(unraisable) -> None:
+        if not (_came and isinstance(unraisable.exc_value, KeyboardInterrupt)):
+            hook(unraisable)
+    return quiet
+
+
+def check() -> None:
+    """Raise the Ctrl-C or SIGTERM that came (and may have been swallowed), if any."""
+    if _came:
+        raise _stop(_came[0])
+
+
+@contextlib.contextmanager
+def handled() -> Iterator[None]:
+    """SIGTERM raises :class:`Terminated` and Ctrl-C KeyboardInterrupt (unless Ctrl-C is
+    ignored, as under ``nohup``), both recorded for :func:`check`, for the ``with`` block;
+    in another thread than the main one (where handlers run) this does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _came.clear()
+    previous = {signal.SIGTERM: signal.signal(signal.SIGTERM, _handler)}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, _handler)
+    hook, sys.unraisablehook = sys.unraisablehook, _unraisable(sys.unraisablehook)
+    try:
+        yield
+    finally:
+        sys.unraisablehook = hook
+        for s, handler in previous.items():
+            signal.signal(s, signal.SIG_DFL if handler is None else handler)
+        _came.clear()
