@@ -312,6 +312,156 @@ def hull_record(frame: int, hull) -> dict:
                          for p in polys]}
 
 
+def _episode_pipeline(config: EpisodeConfig, scene, renderer, params):
+    """The node pipeline of ``config``'s rig on ``renderer``'s background, reset to its first
+    frame: its background levels (~15 MB for 16 cameras) and rectification maps are made once
+    per process and rig."""
+    from pipeline import Pipeline, Rectifier
+
+    text, cameras, numbers = config.scene_yaml, renderer.cameras, tuple(renderer.numbers)
+
+    def make():
+        rectifier = _cached(_RECTIFIERS, (text, numbers), lambda: Rectifier.build(cameras))
+        return Pipeline(cameras, params, renderer.background().rgb, rectifier)
+
+    key = (text, scene.people.count, config.cameras, json.dumps(config.params, sort_keys=True))
+    pipe = _cached(_PIPELINES, key, make, 2 * KEEP)
+    pipe.reset()
+    return pipe
+
+
+class _Frames:
+    """What one episode keeps of its frames, consumed in order: the images written into
+    ``tmp`` (their checksums in ``digests``), the node pipeline's and the true scanlines,
+    the ground-truth hull and the people's rows for people.csv.
+
+    spent : callable(stage, seconds) that adds up the wall-clock time per stage
+    """
+
+    def __init__(self, tmp: Path, config: EpisodeConfig, scene, renderer, pipe, track, spent):
+        from tasking.hull import visual_hull_of_scanlines
+
+        self.tmp, self.pipe, self.track, self.spent = tmp, pipe, track, spent
+        self.people = scene.people
+        self.digests: dict[str, str] = {}       # checksums of the images, from the bytes written
+        self.rows, self.scans, self.gts, self.hulls = [], [], [], []
+        self.cameras = renderer.cameras
+        self.images = ("masks", "silhouettes") if config.fmt == "video" else ("frames", "masks", "silhouettes")
+        self.folders = {(sub, k): f"{sub}/{c.name}/" for sub in self.images
+                        for k, c in enumerate(self.cameras)}                    # relative to tmp
+        xy_all, _, _ = scene.floor_poses()
+        by_number = {c.number: k for k, c in enumerate(scene.cameras)}
+        camera_xy = xy_all[[by_number[n] for n in renderer.numbers]]
+        size = {"object_width": 2 * self.people.radius}
+        self.near, self.far = pipe.sight_range(self.people.height, **size)     # metres: the pipeline's scanlines
+        self.gt_near, self.gt_far = pipe.sight_range(self.people.height, truth=True, **size)  # the true ones
+        room = scene.room.polygon
+        self.hull = lambda gt: visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room,
+                                                        self.gt_near, self.gt_far)
+        self.videos = []
+
+    def start(self, renderer, backgrounds, frame_rate: float) -> None:
+        """Write the calibration and backgrounds, make the image folders, open the videos."""
+        tmp = self.tmp
+        for sub in ("calibration", "background"):
+            (tmp / sub).mkdir()
+        for k, c in enumerate(self.cameras):
+            write_calibration(tmp / "calibration" / f"{c.name}.yaml", c)
+            data, self.digests[f"background/{c.name}.png"] = backgrounds[k]
+            write_file(tmp / "background" / f"{c.name}.png", data)
+            for sub in self.images:
+                (tmp / self.folders[sub, k]).mkdir(parents=True)
+        if "frames" not in self.images:
+            from testbed.lossless import VideoWriter
+            (tmp / "frames").mkdir()
+            self.videos = [VideoWriter(tmp / "frames" / f"{c.name}.mkv", renderer.width, renderer.height,
+                                       frame_rate) for c in self.cameras]
+
+    def consume(self, f: int, fr, sil) -> None:
+        """Write frame f's images, then run the node pipeline, ground truth and hull."""
+        t2 = time.perf_counter()
+        fname = frame_name(f)
+        for k in range(len(self.cameras)):
+            if self.videos:
+                self.videos[k].write(fr.rgb[k])
+            for sub, img in ((("frames", fr.rgb[k]),) if not self.videos else ()) + (
+                    ("masks", fr.labels[k]), ("silhouettes", sil[k])):
+                rel = self.folders[sub, k] + fname
+                self.digests[rel] = write_png(f"{self.tmp}/{rel}", img)
+        t3 = time.perf_counter()
+        scan, gt = self.pipe.process_with_truth(fr.rgb, fr.labels)
+        self.scans.append(scan)
+        self.gts.append(gt)
+        t4 = time.perf_counter()
+        self.hulls.append(hull_record(f, self.hull(gt)))
+        for pid, (x, y) in enumerate(np.asarray(self.track[f], float)):
+            self.rows.append((f, pid, repr(float(x)), repr(float(y)), self.people.radius, self.people.height))
+        for key, dt in (("write", t3 - t2), ("pipeline", t4 - t3), ("hull", time.perf_counter() - t4)):
+            self.spent(key, dt)
+
+    def close_videos(self) -> None:
+        """Close every video writer; raise the first failure unless an exception is under way."""
+        closing = None
+        for v in self.videos:
+            try:
+                v.close()
+            except OSError as exc:
+                closing = closing or exc
+        if closing is not None and sys.exc_info()[1] is None:
+            raise closing
+
+    def finish(self, params, meta: dict) -> None:
+        """Write the files made from every frame: people.csv, scanlines.npz, pipeline.yaml,
+        gt_hull.json and meta.json."""
+        tmp, pipe = self.tmp, self.pipe
+        with open(tmp / "people.csv", "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["frame", "person_id", "x", "y", "radius", "height"])
+            w.writerows(self.rows)
+        save_npz_exact(tmp / "scanlines.npz", scanlines=np.stack(self.scans), gt_scanlines=np.stack(self.gts),
+                       bearings=pipe.bearings, camera_numbers=np.array(meta["cameras"]),
+                       blind_radius=self.near, sight_radius=self.far,
+                       gt_blind_radius=self.gt_near, gt_sight_radius=self.gt_far)
+        params.to_yaml(tmp / "pipeline.yaml")
+        (tmp / "gt_hull.json").write_text(json.dumps(
+            {"units": "metres, world frame", "source": "ground-truth scanlines of all cameras of the episode, between their blind and sight radii",
+             "cameras": meta["cameras"], "frames": self.hulls}, separators=(",", ":")) + "\n")
+        (tmp / "meta.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+
+
+def _render_frames(renderer, track, sensor_rng, frames: _Frames, count: int, spent, progress=None,
+                   overlap: bool = False) -> None:
+    """Render frames 0 .. count - 1 of ``track`` with their silhouettes and hand each to
+    ``frames.consume`` in order; with ``overlap`` a second thread consumes frame f while this
+    one renders frame f + 1 (one frame in flight at most: bounded memory)."""
+    pool = ThreadPoolExecutor(1, thread_name_prefix="episode-consume") if overlap else None
+    pending = None
+    try:
+        for f in range(count):
+            t0 = time.perf_counter()
+            fr = renderer.render(track[f], rng=sensor_rng)
+            t1 = time.perf_counter()
+            sil = silhouettes(renderer, track[f], fr.labels)
+            for key, dt in (("render", t1 - t0), ("silhouettes", time.perf_counter() - t1)):
+                spent(key, dt)
+            if pool is None:
+                frames.consume(f, fr, sil)
+            else:
+                if pending is not None:
+                    pending.result()            # frame f - 1 is done
+                pending = pool.submit(frames.consume, f, fr, sil)
+            if progress is not None and (pool is None or f > 0):
+                progress(1)
+        if pending is not None:
+            pending.result()
+            if progress is not None:
+                progress(1)
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+        frames.close_videos()
+
+
 def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
                    seconds: dict | None = None, overlap: bool = False) -> dict:
     """Render, process and write episode ``index`` into ``out/episode_NNNN``; return its manifest entry.
@@ -329,142 +479,35 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
         seconds[stage] = seconds.get(stage, 0.0) + dt
 
     start = time.perf_counter()
-    from pipeline import Pipeline, PipelineParams, Rectifier
-    from tasking.hull import visual_hull_of_scanlines
+    from pipeline import PipelineParams
     from testbed.episode import walk
 
     out = Path(out)
     config = with_scene_text(config)             # one text for the whole episode
     scene = load_episode_scene(config)
     renderer = _renderer(config, scene)
-    cameras = renderer.cameras
-    numbers = list(renderer.numbers)
     params = PipelineParams.from_mapping(config.params)
-    ss = episode_seed(config.seed, index)
-    motion_rng, sensor_rng = np.random.default_rng(ss).spawn(2)
+    pipe = _episode_pipeline(config, scene, renderer, params)
+    motion_rng, sensor_rng = np.random.default_rng(episode_seed(config.seed, index)).spawn(2)
     track = walk(scene, config.frames, motion_rng)
-    people = scene.people
-    text = config.scene_yaml
-
-    def pipeline():                              # background levels, ~15 MB for 16 cameras: once per worker
-        rectifier = _cached(_RECTIFIERS, (text, tuple(numbers)), lambda: Rectifier.build(cameras))
-        return Pipeline(cameras, params, renderer.background().rgb, rectifier)
-
-    pipe = _cached(_PIPELINES, (text, people.count, config.cameras, json.dumps(config.params, sort_keys=True)),
-                   pipeline, 2 * KEEP)
-    pipe.reset()
-    xy_all, _, _ = scene.floor_poses()
-    by_number = {c.number: k for k, c in enumerate(scene.cameras)}
-    camera_xy = xy_all[[by_number[n] for n in numbers]]
-    room = scene.room.polygon
-    size = {"object_width": 2 * people.radius}
-    near, far = pipe.sight_range(people.height, **size)                 # metres: the pipeline's scanlines
-    gt_near, gt_far = pipe.sight_range(people.height, truth=True, **size)    # the true ones
-
-    backgrounds = _background_pngs((text, people.count, config.cameras), renderer)
+    backgrounds = _background_pngs((config.scene_yaml, scene.people.count, config.cameras), renderer)
     name = episode_name(index)
     tmp = temp_folder(out, f".{name}.")
-    digests: dict[str, str] = {}  # checksums of the images, computed from the bytes written
-    images = ("masks", "silhouettes") if config.fmt == "video" else ("frames", "masks", "silhouettes")
-    folders = {(sub, k): f"{sub}/{c.name}/" for sub in images for k, c in enumerate(cameras)}   # relative
     try:
-        for sub in ("calibration", "background"):
-            (tmp / sub).mkdir()
-        for k, c in enumerate(cameras):
-            write_calibration(tmp / "calibration" / f"{c.name}.yaml", c)
-            data, digests[f"background/{c.name}.png"] = backgrounds[k]
-            write_file(tmp / "background" / f"{c.name}.png", data)
-            for sub in images:
-                (tmp / folders[sub, k]).mkdir(parents=True)
-        videos = []
-        if config.fmt == "video":
-            from testbed.lossless import VideoWriter
-            (tmp / "frames").mkdir()
-            videos = [VideoWriter(tmp / "frames" / f"{c.name}.mkv", renderer.width, renderer.height,
-                                  scene.frame_rate) for c in cameras]
-        rows, scans, gts, hulls = [], [], [], []
-
-        def consume(f: int, fr, sil) -> None:
-            """Write frame f's images, then run the node pipeline, ground truth and hull (frames in order)."""
-            t2 = time.perf_counter()
-            fname = frame_name(f)
-            for k in range(len(cameras)):
-                if videos:
-                    videos[k].write(fr.rgb[k])
-                for sub, img in ((("frames", fr.rgb[k]),) if not videos else ()) + (
-                        ("masks", fr.labels[k]), ("silhouettes", sil[k])):
-                    rel = folders[sub, k] + fname
-                    digests[rel] = write_png(f"{tmp}/{rel}", img)
-            t3 = time.perf_counter()
-            scan, gt = pipe.process_with_truth(fr.rgb, fr.labels)
-            scans.append(scan)
-            gts.append(gt)
-            t4 = time.perf_counter()
-            hulls.append(hull_record(f, visual_hull_of_scanlines(camera_xy, pipe.bearings, gt, room, gt_near, gt_far)))
-            for pid, (x, y) in enumerate(np.asarray(track[f], float)):
-                rows.append((f, pid, repr(float(x)), repr(float(y)), people.radius, people.height))
-            for key, dt in (("write", t3 - t2), ("pipeline", t4 - t3), ("hull", time.perf_counter() - t4)):
-                spent(key, dt)
-
+        frames = _Frames(tmp, config, scene, renderer, pipe, track, spent)
+        frames.start(renderer, backgrounds, scene.frame_rate)
         loop_start = time.perf_counter()
-        # overlap: a second thread consumes frame f while this one renders frame f + 1; one
-        # frame in flight at most (bounded memory), consumed in order (the pipeline's state)
-        pool = ThreadPoolExecutor(1, thread_name_prefix="episode-consume") if overlap else None
-        pending = None
-        try:
-            for f in range(config.frames):
-                t0 = time.perf_counter()
-                fr = renderer.render(track[f], rng=sensor_rng)
-                t1 = time.perf_counter()
-                sil = silhouettes(renderer, track[f], fr.labels)
-                for key, dt in (("render", t1 - t0), ("silhouettes", time.perf_counter() - t1)):
-                    spent(key, dt)
-                if pool is None:
-                    consume(f, fr, sil)
-                else:
-                    if pending is not None:
-                        pending.result()            # frame f - 1 is done
-                    pending = pool.submit(consume, f, fr, sil)
-                if progress is not None and (pool is None or f > 0):
-                    progress(1)
-            if pending is not None:
-                pending.result()
-                if progress is not None:
-                    progress(1)
-        finally:
-            if pool is not None:
-                pool.shutdown(wait=True, cancel_futures=True)
-            closing = None                      # close every writer; the first failure is the one to see
-            for v in videos:
-                try:
-                    v.close()
-                except OSError as exc:
-                    closing = closing or exc
-            if closing is not None and sys.exc_info()[1] is None:
-                raise closing
+        _render_frames(renderer, track, sensor_rng, frames, config.frames, spent, progress, overlap)
         loop_end = time.perf_counter()
-        with open(tmp / "people.csv", "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["frame", "person_id", "x", "y", "radius", "height"])
-            w.writerows(rows)
-        save_npz_exact(tmp / "scanlines.npz", scanlines=np.stack(scans), gt_scanlines=np.stack(gts),
-                       bearings=pipe.bearings, camera_numbers=np.array(numbers),
-                       blind_radius=near, sight_radius=far, gt_blind_radius=gt_near, gt_sight_radius=gt_far)
-        params.to_yaml(tmp / "pipeline.yaml")
-        (tmp / "gt_hull.json").write_text(json.dumps(
-            {"units": "metres, world frame", "source": "ground-truth scanlines of all cameras of the episode, between their blind and sight radii",
-             "cameras": numbers, "frames": hulls}, separators=(",", ":")) + "\n")
-        source = config.scene
-        meta = {
+        frames.finish(params, {
             "episode": index, "seed": config.seed, "spawn_key": [index],
-            "scene": scene.name, "scene_file": source, "scene_yaml": text,
-            "people": people.count, "cameras": numbers, "frames": config.frames, "dt": scene.dt,
-            "format": config.fmt, "backend": renderer.backend,
+            "scene": scene.name, "scene_file": config.scene, "scene_yaml": config.scene_yaml,
+            "people": scene.people.count, "cameras": list(renderer.numbers), "frames": config.frames,
+            "dt": scene.dt, "format": config.fmt, "backend": renderer.backend,
             "background": "clean: no sensor noise, no gain jitter",
-            "silhouettes": f"bit i = person i, {np.dtype(silhouette_dtype(people.count)).name} PNG",
-        }
-        (tmp / "meta.json").write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
-        files = checksums(tmp, digests)
+            "silhouettes": f"bit i = person i, {np.dtype(silhouette_dtype(scene.people.count)).name} PNG",
+        })
+        files = checksums(tmp, frames.digests)
         end = time.perf_counter()
         spent("total", end - start)
         spent("finish", (loop_start - start) + (end - loop_end))    # set-up and the files after the frames
