@@ -31,7 +31,7 @@ import socket
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from scene.checks import names
@@ -579,52 +579,7 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
                 entry = render_episode(config, i, str(out), progress, secs, overlap=overlap)
                 finished(entry, socket.gethostname(), secs)
         else:
-            ready = threading.Event()               # set as each episode's task ends
-
-            def submit(i: int):
-                fut = client.submit(_remote_episode, config, i, str(out.absolute()), pure=False,
-                                    key=episode_key(i))
-                fut.add_done_callback(lambda _: ready.set())
-                return fut
-
-            # index -> future of the episodes not yet listed; a listed one is dropped at once, so
-            # the cluster lets go of its result (a checksum per file: ~3 MB for 300 frames). No
-            # distributed.wait(timeout=...): its TimeoutError's traceback kept every future it
-            # was given alive until the garbage collector broke the cycle. At most
-            # in_flight(client) episodes are submitted at a time: 200 000 submitted at once
-            # slowed rendering tenfold (and took minutes to cancel), 10**12 filled the memory.
-            pending: dict = {}
-            shown: dict[int, int] = {}              # frames counted per episode so far
-
-            def top_up() -> None:
-                for i in itertools.islice(todo, max(0, in_flight(client) - len(pending))):
-                    pending[i], shown[i] = submit(i), 0
-
-            def show(index: int, frames: int) -> None:
-                if progress is not None and frames > shown[index]:
-                    progress(frames - shown[index])
-                    shown[index] = frames
-
-            try:
-                top_up()
-                while pending:
-                    stops.check()                   # a Ctrl-C that a future's finalizer swallowed
-                    ready.clear()                   # an episode ending from here on wakes the wait below
-                    for index in [i for i, f in pending.items() if f.done()]:
-                        entry, host, secs = pending[index].result()    # re-raises the episode's error
-                        finished(entry, host, secs)
-                        del pending[index]
-                        show(index, entry["frames"])
-                        del shown[index]
-                    top_up()
-                    for index, frames in (frames_in_progress(out) if progress else {}).items():
-                        if index in shown:
-                            show(index, min(frames, config.frames - 1))
-                    if pending:                     # wake at the next finished episode, or in 0.25 s
-                        ready.wait(0.25)
-            finally:
-                for f in pending.values():
-                    f.cancel()
+            _generate_on_dask(client, config, out, todo, finished, progress)
         listing.flush()
         complete = True
     finally:
@@ -640,6 +595,60 @@ def generate(config: EpisodeConfig, episodes: int, out: Path, keep: dict[int, di
         with contextlib.suppress(*(() if complete else (OSError,))):    # the first error is the one to see
             write_json_atomic(out / RUN_INFO, info)
     return done
+
+
+def _generate_on_dask(client, config: EpisodeConfig, out: Path, todo: Iterator[int],
+                      finished: Callable[[dict, str, dict], None],
+                      progress: Callable[[int], None] | None = None) -> None:
+    """Render the episodes ``todo`` on ``client``'s workers, calling ``finished(entry, host,
+    seconds)`` as each one ends; see :func:`generate`. The episodes not finished are
+    cancelled when this returns or raises."""
+    ready = threading.Event()               # set as each episode's task ends
+
+    def submit(i: int):
+        fut = client.submit(_remote_episode, config, i, str(out.absolute()), pure=False,
+                            key=episode_key(i))
+        fut.add_done_callback(lambda _: ready.set())
+        return fut
+
+    # index -> future of the episodes not yet listed; a listed one is dropped at once, so
+    # the cluster lets go of its result (a checksum per file: ~3 MB for 300 frames). No
+    # distributed.wait(timeout=...): its TimeoutError's traceback kept every future it
+    # was given alive until the garbage collector broke the cycle. At most
+    # in_flight(client) episodes are submitted at a time: 200 000 submitted at once
+    # slowed rendering tenfold (and took minutes to cancel), 10**12 filled the memory.
+    pending: dict = {}
+    shown: dict[int, int] = {}              # frames counted per episode so far
+
+    def top_up() -> None:
+        for i in itertools.islice(todo, max(0, in_flight(client) - len(pending))):
+            pending[i], shown[i] = submit(i), 0
+
+    def show(index: int, frames: int) -> None:
+        if progress is not None and frames > shown[index]:
+            progress(frames - shown[index])
+            shown[index] = frames
+
+    try:
+        top_up()
+        while pending:
+            stops.check()                   # a Ctrl-C that a future's finalizer swallowed
+            ready.clear()                   # an episode ending from here on wakes the wait below
+            for index in [i for i, f in pending.items() if f.done()]:
+                entry, host, secs = pending[index].result()    # re-raises the episode's error
+                finished(entry, host, secs)
+                del pending[index]
+                show(index, entry["frames"])
+                del shown[index]
+            top_up()
+            for index, frames in (frames_in_progress(out) if progress else {}).items():
+                if index in shown:
+                    show(index, min(frames, config.frames - 1))
+            if pending:                     # wake at the next finished episode, or in 0.25 s
+                ready.wait(0.25)
+    finally:
+        for f in pending.values():
+            f.cancel()
 
 
 def earlier_runs(out: Path) -> list[dict]:
