@@ -148,6 +148,41 @@ def _valid_position(i, p, positions, radii, inner) -> bool:
     return bool(np.all(d >= radii + radii[i] - _EPS))
 
 
+def _proposals(pos: np.ndarray, dest: np.ndarray, radii: np.ndarray, step_len: np.ndarray):
+    """Everyone's next position before the room and the others are checked.
+
+    pos, dest : (m, 2) float, metres; radii, step_len : (m,) float, metres
+    Returns (proposal (m, 2) float, metres; arrive (m,) bool: the proposal is the
+    destination). A person heads for its destination, or, with someone within
+    ``2 * step_len`` of touching it, between it and its destination and approached, walks
+    along the tangent around the nearest such person, turned clockwise.
+    """
+    m = len(radii)
+    to_dest = dest - pos
+    dist = np.linalg.norm(to_dest, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        heading = np.where(dist[:, None] > 0, to_dest / dist[:, None], 0.0)
+    # Right-hand avoidance: vectorised over pairs.
+    diff = pos[None, :, :] - pos[:, None, :]  # (m, m, 2) from i to j
+    centre_dist = np.linalg.norm(diff, axis=2)
+    gap = centre_dist - radii[:, None] - radii[None, :]
+    np.fill_diagonal(gap, np.inf)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        towards = diff / centre_dist[:, :, None]
+    approaching = np.einsum("ik,ijk->ij", heading, np.nan_to_num(towards)) > 0
+    threat = (gap < 2.0 * step_len[:, None] + _EPS) & approaching
+    # Only steer around someone standing between us and our destination.
+    threat &= centre_dist < dist[:, None] + radii[None, :]
+    gap_masked = np.where(threat, gap, np.inf)
+    nearest = np.argmin(gap_masked, axis=1)
+    avoid = np.isfinite(gap_masked[np.arange(m), nearest])
+    u = towards[np.arange(m), nearest]
+    right = np.column_stack([u[:, 1], -u[:, 0]])  # u rotated by -90 deg (clockwise)
+    velocity = np.where(avoid[:, None], right, heading)
+    arrive = (~avoid) & (dist <= step_len)
+    return np.where(arrive[:, None], dest, pos + velocity * step_len[:, None]), arrive
+
+
 def random_waypoint(
     room: Polygon,
     radii,
@@ -210,29 +245,7 @@ def random_waypoint(
     out[0] = pos
     for t in range(1, n_steps):
         step_len = speeds * dt
-        to_dest = dest - pos
-        dist = np.linalg.norm(to_dest, axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            heading = np.where(dist[:, None] > 0, to_dest / dist[:, None], 0.0)
-        # Right-hand avoidance: vectorised over pairs.
-        diff = pos[None, :, :] - pos[:, None, :]  # (m, m, 2) from i to j
-        centre_dist = np.linalg.norm(diff, axis=2)
-        gap = centre_dist - radii[:, None] - radii[None, :]
-        np.fill_diagonal(gap, np.inf)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            towards = diff / centre_dist[:, :, None]
-        approaching = np.einsum("ik,ijk->ij", heading, np.nan_to_num(towards)) > 0
-        threat = (gap < 2.0 * step_len[:, None] + _EPS) & approaching
-        # Only steer around someone standing between us and our destination.
-        threat &= centre_dist < dist[:, None] + radii[None, :]
-        gap_masked = np.where(threat, gap, np.inf)
-        nearest = np.argmin(gap_masked, axis=1)
-        avoid = np.isfinite(gap_masked[np.arange(m), nearest])
-        u = towards[np.arange(m), nearest]
-        right = np.column_stack([u[:, 1], -u[:, 0]])  # u rotated by -90 deg (clockwise)
-        velocity = np.where(avoid[:, None], right, heading)
-        arrive = (~avoid) & (dist <= step_len)
-        proposal = np.where(arrive[:, None], dest, pos + velocity * step_len[:, None])
+        proposal, arrive = _proposals(pos, dest, radii, step_len)
 
         # Enforce the constraints person by person against everyone's latest position.
         for i in range(m):
