@@ -115,31 +115,48 @@ def open_client(workers: int | None = None, scheduler: str | None = None,
     if scheduler is None and workers == 0:
         yield None
         return
+    if scheduler is not None:
+        with _scheduler_client(scheduler, connect_timeout) as client:
+            yield client
+    else:
+        with _local_client(default_workers() if workers is None else int(workers)) as client:
+            yield client
+
+
+@contextlib.contextmanager
+def _scheduler_client(scheduler: str, connect_timeout: float) -> Iterator[Any]:
+    """A client of the scheduler at ``scheduler`` (``tcp://`` added when no protocol is
+    given), its Dask log lines silenced while it is open."""
+    from distributed import Client
+
+    address = scheduler if "://" in scheduler else f"tcp://{scheduler}"
+    check_scheduler(address, connect_timeout)
+    try:
+        client = Client(address, timeout=f"{connect_timeout}s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({msg})") from None
+    # a lost scheduler is the run's own one-line error; Dask's logs would add a traceback
+    loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client")]
+    levels = [log.level for log in loggers]
+    try:
+        for log in loggers:
+            log.setLevel(logging.CRITICAL)
+        yield client
+    finally:
+        client.close()
+        for log, level in zip(loggers, levels, strict=True):
+            log.setLevel(level)
+
+
+@contextlib.contextmanager
+def _local_client(n: int) -> Iterator[Any]:
+    """A client of a new local cluster of ``n`` worker processes (one thread each, see
+    :func:`open_client`), closed afterwards; its workers are killed if they have not
+    stopped by themselves :data:`STOP_TIMEOUT` s after an exception."""
+    import dask
     from distributed import Client, LocalCluster
 
-    if scheduler is not None:
-        address = scheduler if "://" in scheduler else f"tcp://{scheduler}"
-        check_scheduler(address, connect_timeout)
-        try:
-            client = Client(address, timeout=f"{connect_timeout}s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({msg})") from None
-        # a lost scheduler is the run's own one-line error; Dask's logs would add a traceback
-        loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client")]
-        levels = [log.level for log in loggers]
-        try:
-            for log in loggers:
-                log.setLevel(logging.CRITICAL)
-            yield client
-        finally:
-            client.close()
-            for log, level in zip(loggers, levels, strict=True):
-                log.setLevel(level)
-        return
-    import dask
-
-    n = default_workers() if workers is None else int(workers)
     # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers; any explicit glibc
     # threshold turns off glibc's dynamic mmap threshold, so every large numpy temporary
     # is mmapped and page-faulted afresh: the node pipeline ran 2.2x slower (98 vs 217
