@@ -165,6 +165,42 @@ def check_inputs_outside(out: Path, args: argparse.Namespace) -> None:
                              "move it out of the dataset first")
 
 
+def _prepare(args: argparse.Namespace, config, out: Path) -> dict[int, dict]:
+    """The finished episodes to keep (:func:`testbed.generate.prepare_output`), with a
+    progress bar while --resume reads back every kept episode."""
+    from tqdm import tqdm
+
+    from testbed.generate import prepare_output
+
+    bars = []
+
+    def verified(files: int, total: int) -> None:
+        if not bars:
+            bars.append(tqdm(total=total, desc="verify", unit="file", file=sys.stderr, dynamic_ncols=True))
+        bars[0].update(files)
+
+    try:
+        return prepare_output(out, config, args.episodes, args.resume, args.overwrite, verified)
+    finally:
+        for bar in bars:
+            bar.close()
+
+
+def _check_space(args: argparse.Namespace, config, scene, out: Path, todo: int) -> None:
+    """With --resume or --overwrite, refuse a folder that cannot hold one more episode now
+    that the episodes kept are read or the old ones deleted; warn when ``todo`` episodes need
+    more than is free."""
+    from testbed.generate import check_space, estimate_bytes, free_bytes, size_text
+
+    if args.overwrite or args.resume:
+        check_space(out, estimate_bytes(config, scene, 1), "one episode")
+    need, (free, where) = estimate_bytes(config, scene, todo), free_bytes(out)
+    if free < need:
+        print(f"warning: --out: {size_text(free)} free on {where}; {todo} episodes need about "
+              f"{size_text(need)}: the run stops when the disk is full (the finished episodes stay "
+              "valid; --resume finishes it)", file=sys.stderr)
+
+
 def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None) -> int:
     """The run itself, once ``out`` is checked and locked."""
     from tqdm import tqdm
@@ -172,16 +208,11 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     from testbed.cli import RunError
     from testbed.generate import (
         MANIFEST,
-        check_space,
         check_worker_versions,
         check_workers_share,
-        estimate_bytes,
-        free_bytes,
         generate,
-        prepare_output,
         read_manifest,
         remove_unlisted,
-        size_text,
     )
     from testbed.parallel import open_client, wait_for_a_worker
 
@@ -192,29 +223,12 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
                 wait_for_a_worker(client, args.scheduler)           # checked below, then rendered
                 check_worker_versions(client)
                 check_workers_share(client, out)
-            bars = []                                 # resuming reads back every kept episode
-
-            def verified(files: int, total: int) -> None:
-                if not bars:
-                    bars.append(tqdm(total=total, desc="verify", unit="file", file=sys.stderr, dynamic_ncols=True))
-                bars[0].update(files)
-
-            try:
-                keep = prepare_output(out, config, args.episodes, args.resume, args.overwrite, verified)
-            finally:
-                for bar in bars:
-                    bar.close()
+            keep = _prepare(args, config, out)
             todo = args.episodes - len(keep)
             if todo == 0:
                 print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
                 return 0
-            if args.overwrite or args.resume:
-                check_space(out, estimate_bytes(config, scene, 1), "one episode")
-            need, (free, where) = estimate_bytes(config, scene, todo), free_bytes(out)
-            if free < need:
-                print(f"warning: --out: {size_text(free)} free on {where}; {todo} episodes need about "
-                      f"{size_text(need)}: the run stops when the disk is full (the finished episodes stay "
-                      "valid; --resume finishes it)", file=sys.stderr)
+            _check_space(args, config, scene, out, todo)
             with tqdm(total=todo * args.frames, desc="render", unit="frame", file=sys.stderr,
                       dynamic_ncols=True) as bar:
                 info = {"workers": workers, "scheduler": args.scheduler,
