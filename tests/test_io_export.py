@@ -76,3 +76,27 @@ def test_a_missing_or_malformed_calibration_names_the_file(episode, capsys):
     assert export_error(episode, capsys) == f"calibration: no such file '{episode}/calibration/cam02.yaml'"
     (episode / "calibration" / "cam02.yaml").write_text("%YAML:1.0\n---\ncamera_number: 2\n")
     assert export_error(episode, capsys).startswith("calibration: cam02.yaml has no ")
+
+
+@pytest.mark.parametrize("where", [".", "calibration/.."])
+def test_an_episode_given_as_the_current_folder_is_checked_against_its_manifest(episode, capsys, monkeypatch,
+                                                                               where):
+    """Given as ``.`` (or a path ending in ``..``) the episode's name was ``""``: no manifest
+    entry matched, and a changed file was exported with "warning: no manifest lists ;"."""
+    from testbed.checksum import file_digest
+
+    data = episode.parent / "data"                  # a dataset beside OUT, not holding it
+    data.mkdir()
+    episode = episode.rename(data / episode.name)
+    files = {p.relative_to(episode).as_posix(): file_digest(p) for p in sorted(episode.rglob("*")) if p.is_file()}
+    (data / "manifest.json").write_text(json.dumps(
+        {"format_version": 2, "episode_layout": 3, "checksum": "blake3", "episodes_planned": 4,
+         "episodes": [{"index": 3, "name": "episode_0003", "seed": 0, "spawn_key": [3], "frames": 1,
+                       "files": files}]}))
+    (episode / "people.csv").write_text("frame,person_id,x,y,radius,height\n0,0,3.0,2.0,0.25,1.75\n")
+    monkeypatch.chdir(episode)
+    capsys.readouterr()
+    assert main(["export", "wildtrack", where, str(data.parent / "wt")]) == 2
+    assert capsys.readouterr().err.strip() == ("camtask export: error: DIR: episode_0003 differs from its manifest "
+                                               "(1 changed (people.csv)); `camtask verify` names every such file")
+    assert not (data.parent / "wt").exists()

@@ -138,6 +138,7 @@ def check_intact(episode: Path) -> None:
     when no manifest lists it (a folder copied out of its dataset, or left by a stopped run)."""
     from testbed.generate import episode_problems, manifest_algorithm, problems_text, read_manifest
 
+    episode = episode.resolve()            # "." or "x/.." has no name to look up, nor the dataset as parent
     m = read_manifest(episode.parent)
     entry = next((e for e in (m or {}).get("episodes", []) if e["name"] == episode.name), None)
     if entry is None:
