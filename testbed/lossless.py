@@ -115,7 +115,10 @@ def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[n
 
     A file ffmpeg cannot open, a slice whose CRC fails, a truncated file (and, given
     ``frames``, another number of frames) is a one-line ValueError naming the file, raised
-    once the frames before it are yielded.
+    once the frames before it are yielded: a frame is yielded only while ffmpeg has
+    reported no error (ffmpeg conceals a corrupt slice and goes on decoding; its message
+    comes before the frame's bytes), so a corrupt frame never is, not even the first one
+    that ``next(read_video(path))`` takes.
 
     One ffmpeg decodes the file to PPM images (a header ``P6\\n<w> <h>\\n255\\n``, then the
     RGB bytes): each frame says its own size, so the file is not opened a second time to
@@ -126,7 +129,7 @@ def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[n
     proc = subprocess.Popen([_ffmpeg(), "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
                              "-f", "image2pipe", "-c:v", "ppm", "-pix_fmt", "rgb24", "-"],
                             stdout=subprocess.PIPE, stderr=log, start_new_session=True)
-    n, short = 0, False
+    n, short, held = 0, False, False           # frames yielded; a frame read but not yielded
     try:
         while True:
             head = proc.stdout.readline()
@@ -142,14 +145,19 @@ def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[n
             if not raw or len(raw) < w * h * 3:
                 short = True                    # ffmpeg's message, when it failed, says more
                 break
+            if os.fstat(log.fileno()).st_size:  # an error decoding this frame (or one after it)
+                held = True
+                break
             yield np.frombuffer(raw, np.uint8).reshape(h, w, 3)
             n += 1
         if short:
             proc.stdout.read()                  # at its end already (a short read is the end of output)
+        elif held:
+            proc.kill()                         # its error is in the log: the frames after it are not wanted
         code = proc.wait()
         log.seek(0)
         if code != 0 or log.read().strip():
-            if n == 0:
+            if n == 0 and not held:
                 raise ValueError(f"video: cannot read {str(path)!r}: {_last_line(log)} "
                                  "(not a video ffmpeg can open, or corrupt)")
             raise ValueError(f"video: cannot read {str(path)!r} after {n} frames: {_last_line(log)} "

@@ -52,6 +52,31 @@ def test_corrupt_slice_is_an_error(video, tmp_path):
         list(read_video(bad))
 
 
+@pytest.mark.parametrize("where", [0.25, 0.5, 0.75])
+def test_a_corrupt_frame_is_never_yielded(video, tmp_path, where):
+    """The slice's CRC error was raised only at the end: the corrupt frame and those after it
+    were yielded first, and ``next(read_video(...))`` returned a corrupt first frame silently."""
+    data = bytearray(video.read_bytes())
+    data[int(len(data) * where)] ^= 0xFF
+    bad = tmp_path / "bad.mkv"
+    bad.write_bytes(bytes(data))
+    good = frames(6)
+    got = []
+    with pytest.raises(ValueError, match="bad.mkv.*CRC"):
+        got.extend(read_video(bad))                  # keeps the frames taken before the error
+    for f, rgb in enumerate(got):
+        np.testing.assert_array_equal(rgb, good[f], err_msg=f"frame {f}")
+
+
+def test_next_does_not_take_a_corrupt_first_frame(video, tmp_path):
+    data = bytearray(video.read_bytes())
+    data[int(len(data) * 0.1)] ^= 0xFF              # in frame 0's slices
+    bad = tmp_path / "bad.mkv"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="bad.mkv.*CRC"):
+        next(read_video(bad))
+
+
 def test_not_a_video_is_one_line(tmp_path):
     bad = tmp_path / "junk.mkv"
     bad.write_bytes(b"\x00" * 5000)
