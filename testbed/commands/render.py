@@ -36,8 +36,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=int, default=None,
-                   help="local worker processes (default: number of cores, at most --episodes; "
-                        "0 or a single episode = in this process)")
+                   help="local worker processes (default: number of cores; at most the episodes to render, "
+                        "0 or a single one = in this process)")
     g.add_argument("--scheduler", help="address of an existing Dask scheduler (DIR must be shared)")
     m = p.add_mutually_exclusive_group()
     m.add_argument("--resume", action="store_true",
@@ -218,12 +218,17 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
 
     started = False
     try:
+        if args.scheduler is None:
+            # local workers: no more than the episodes left to render (one, or none: in this process)
+            keep = _prepare(args, config, out)
+            left = args.episodes - len(keep)
+            workers = 0 if left <= 1 else min(workers, left)
         with open_client(workers, args.scheduler) as client:
             if args.scheduler is not None:
                 wait_for_a_worker(client, args.scheduler)           # checked below, then rendered
                 check_worker_versions(client)
                 check_workers_share(client, out)
-            keep = _prepare(args, config, out)
+                keep = _prepare(args, config, out)
             todo = args.episodes - len(keep)
             if todo == 0:
                 print(f"{out}: all {args.episodes} episodes already finished", file=sys.stderr)
