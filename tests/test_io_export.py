@@ -100,3 +100,10 @@ def test_an_episode_given_as_the_current_folder_is_checked_against_its_manifest(
     assert capsys.readouterr().err.strip() == ("camtask export: error: DIR: episode_0003 differs from its manifest "
                                                "(1 changed (people.csv)); `camtask verify` names every such file")
     assert not (data.parent / "wt").exists()
+
+
+def test_a_dir_that_does_not_exist_or_is_a_file_is_named_so(episode, capsys):
+    """It said 'no episode 0 in DIR', as if the folder held other episodes."""
+    expected = " (expected a dataset or episode folder written by `camtask render`)"
+    assert export_error(episode.parent / "nowhere", capsys) == f"DIR: {episode.parent / 'nowhere'}: no such folder{expected}"
+    assert export_error(episode / "people.csv", capsys) == f"DIR: {episode / 'people.csv'}: not a folder{expected}"

@@ -50,6 +50,10 @@ def run(args) -> int:
     index = 0 if args.episode is None else args.episode
     if index < 0:
         raise ValueError(f"--episode: expected an integer >= 0, got {index}")
+    if not root.is_dir():
+        what = "not a folder" if root.exists() else "no such folder"
+        raise FileNotFoundError(f"DIR: {root}: {what} (expected a dataset or episode folder written by "
+                                "`camtask render`)")
     episode = root if (root / "meta.json").is_file() else root / episode_name(index)
     if not (episode / "meta.json").is_file():
         raise FileNotFoundError(f"DIR: no episode {index} in {root} (expected {episode}/meta.json)")
