@@ -145,6 +145,23 @@ def load_episode_scene(config: EpisodeConfig):
     return with_people(scene, config.people)
 
 
+def scene_own(config: EpisodeConfig) -> tuple[int, tuple[int, ...]]:
+    """The number of people and the camera numbers (in the file's order) of ``config``'s
+    scene itself, whatever ``config.people`` and ``config.cameras`` ask for."""
+    own = load_episode_scene(dataclasses.replace(config, people=None))
+    return own.people.count, tuple(c.number for c in own.cameras)
+
+
+def canonical(config: EpisodeConfig) -> EpisodeConfig:
+    """``config`` with ``people`` and ``cameras`` None where they name the scene's own: ``--people
+    3`` on a scene of 3 people, or every camera in the scene file's order, renders the same
+    episodes as leaving them out, so it is the same run (the same manifest, and ``--resume``
+    takes either)."""
+    count, numbers = scene_own(config)
+    return dataclasses.replace(config, people=None if config.people == count else config.people,
+                               cameras=None if config.cameras == numbers else config.cameras)
+
+
 def _renderer(config: EpisodeConfig, scene):
     """This process's renderer of ``scene`` (:func:`load_episode_scene` of ``config``)."""
     from render import Renderer

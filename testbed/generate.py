@@ -37,7 +37,7 @@ from pathlib import Path
 from scene.checks import names
 from testbed import stops
 from testbed.checksum import ALGORITHM, ALGORITHMS
-from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode
+from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode, scene_own
 from testbed.output import PROBE  # the files check_out and check_workers_share make and remove
 from testbed.parallel import default_workers
 
@@ -323,7 +323,7 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
     elif resume and existing:
         old = read_manifest(out)
         if old is not None:
-            if old.get("config") != config.to_dict():
+            if _canonical_dict(old.get("config"), config) != config.to_dict():
                 raise ValueError(f"--resume: {out / MANIFEST} was written with other arguments "
                                  f"({_diff(old, config)}); give the arguments of that run to finish it "
                                  "(the same scene string too: it is recorded in each meta.json), or "
@@ -450,9 +450,20 @@ def remove_unlisted(out: Path, entries: dict[int, dict] | None = None) -> None:
             p.unlink(missing_ok=True)
 
 
+def _canonical_dict(was, config: EpisodeConfig):
+    """A manifest's ``config`` as :func:`testbed.episodes.canonical` makes it when its scene
+    is ``config``'s (an earlier camtask wrote ``people: 3`` for ``--people 3`` on a scene of 3
+    people); anything else as it is."""
+    if not isinstance(was, dict) or was.get("scene") != config.scene:
+        return was
+    count, numbers = scene_own(config)
+    own = {"people": count, "cameras": list(numbers)}
+    return {k: None if k in own and v == own[k] else v for k, v in was.items()}
+
+
 def _diff(old: dict, config: EpisodeConfig) -> str:
     new = config.to_dict()
-    was = dict(old.get("config") or {})
+    was = dict(_canonical_dict(old.get("config"), config) or {})
     keys = sorted(k for k in set(new) | set(was) if new.get(k) != was.get(k))
     return ", ".join(f"{k}: {was.get(k)!r} then, {new.get(k)!r} now" for k in keys)
 

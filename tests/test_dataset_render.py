@@ -774,3 +774,26 @@ def test_resume_refuses_the_episodes_of_an_earlier_layout(dataset, tmp_path, cap
     assert main(ARGS + ["--episodes", "3", "--out", str(out), "--workers", "0", "--resume"]) == 2
     assert "are of layout 1 (an earlier camtask), this camtask writes layout 3" in capsys.readouterr().err
     assert files_of(out) == before
+
+
+def test_the_scenes_own_people_and_cameras_given_are_the_run_without_them(tmp_path, capsys):
+    """--people 3 on the lab's 3 people, --cameras of all 16: the same episodes, so the same run (manifest
+    bytes equal) and --resume takes either; an earlier manifest that recorded people: 3 is resumed too."""
+    base = ["render", "lab", "--frames", "1", "--seed", "2", "--workers", "0"]
+    plain, given = tmp_path / "plain", tmp_path / "given"
+    assert main(base + ["--episodes", "1", "--out", str(plain)]) == 0
+    every = ",".join(str(n) for n in range(16, 0, -1))
+    assert main(base + ["--episodes", "1", "--people", "3", "--cameras", every, "--out", str(given)]) == 0
+    assert files_of(given) == files_of(plain)
+    assert json.loads((given / "manifest.json").read_text())["config"]["people"] is None
+    assert main(base + ["--episodes", "2", "--people", "3", "--out", str(plain), "--resume"]) == 0
+    # a manifest written with people: 3 and every camera listed
+    m = json.loads((given / "manifest.json").read_text())
+    m["config"] |= {"people": 3, "cameras": list(range(1, 17))}
+    (given / "manifest.json").write_text(json.dumps(m))
+    assert main(base + ["--episodes", "2", "--out", str(given), "--resume"]) == 0
+    assert files_of(given) == files_of(plain)
+    # other people are another run, named as before
+    capsys.readouterr()
+    assert main(base + ["--episodes", "2", "--people", "2", "--out", str(given), "--resume"]) == 2
+    assert "people: None then, 2 now" in capsys.readouterr().err

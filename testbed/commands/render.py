@@ -71,6 +71,7 @@ def build_config(args: argparse.Namespace):
     from testbed.episode import check_renderable
     from testbed.episodes import (
         EpisodeConfig,
+        canonical,
         load_episode_scene,
         silhouette_dtype,
         with_scene_text,
@@ -87,6 +88,7 @@ def build_config(args: argparse.Namespace):
     scene = load_episode_scene(config)
     check_renderable(scene, "scene")
     check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])
+    config = canonical(config)                        # --people 3 of a scene of 3: the run without it
     check_column_threshold(config.params["column_threshold"], [c for c in scene.cameras if config.cameras is None
                                                                or c.number in config.cameras], "--params")
     silhouette_dtype(scene.people.count, "--people" if args.people is not None else "people.count")
