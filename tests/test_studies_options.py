@@ -211,3 +211,17 @@ def test_tracking_json_keeps_seed_and_arguments_in_meta_alone(capsys, tmp_path):
     assert set(doc) == {"records", "figure_trial", "meta"}
     assert doc["meta"]["seed"] == 3 and doc["meta"]["arguments"]["pairs"] == [["uniform", 4]]
     assert png.stat().st_size > 5000
+
+
+def test_quadrature_scales_with_the_radius(capsys):
+    """--quadrature took any spacing up to 0.05 m whatever --radius: with --radius 0.01 a row
+    every 0.01 m (one row per disc) gave a limit 4x low (0.0020 against 0.0088 object areas)."""
+    err = one_line_error(capsys, "cameras", "--radius", "0.01", "--quadrature", "0.01", "--objects", "2",
+                         "--cameras", "4", "--trials", "1")
+    assert err == ("--quadrature: expected a number in [radius / 1000, radius / 2] = [1e-05, 0.005], "
+                   "got 0.01")
+    # the paper's radius keeps its bounds: 0.05 = 0.1 / 2
+    assert cli.main(["study", "cameras", "--quadrature", "0.05", "--objects", "2", "--cameras", "4",
+                     "--trials", "1", "--workers", "0", "--no-progress"]) == 0
+    capsys.readouterr()
+

@@ -63,9 +63,9 @@ def parse(args) -> dict:
                              f"({max(cameras)}), got {limit}")
     core.check_discs(max(objects), args.radius)
     quadrature = args.radius / QUADRATURE_PER_RADIUS if args.quadrature is None else args.quadrature
-    if not args.radius / 1000 <= quadrature <= 0.05:
-        raise ValueError(f"--quadrature: expected a number in [radius / 1000, 0.05] = [{args.radius / 1000:g}, 0.05], "
-                         f"got {quadrature}")
+    if not args.radius / 1000 <= quadrature <= args.radius / 2:     # at least four rows across a disc
+        raise ValueError(f"--quadrature: expected a number in [radius / 1000, radius / 2] = "
+                         f"[{args.radius / 1000:g}, {args.radius / 2:g}], got {quadrature}")
     fit_min = FIT_MIN if args.fit_min is None else args.fit_min
     if args.fit_min is not None:                # a slope needs two camera counts: refused, not "n/a"
         if len(cameras) < 2:
