@@ -225,3 +225,14 @@ def test_quadrature_scales_with_the_radius(capsys):
                      "--trials", "1", "--workers", "0", "--no-progress"]) == 0
     capsys.readouterr()
 
+
+
+def test_quadrature_is_refused_with_a_camera_limit(capsys):
+    """--quadrature with --limit-cameras N was silently unused, and meta.arguments recorded it."""
+    err = one_line_error(capsys, "cameras", "--limit-cameras", "64", "--quadrature", "0.001", "--objects", "2",
+                         "--cameras", "4", "--trials", "1")
+    assert err == ("--quadrature: the row spacing of the exact limit (--limit-cameras inf); "
+                   "--limit-cameras 64 takes none")
+    assert cli.main(["study", "cameras", "--limit-cameras", "64", "--objects", "2", "--cameras", "4",
+                     "--trials", "1", "--workers", "0", "--no-progress", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["meta"]["arguments"]["quadrature"] is None

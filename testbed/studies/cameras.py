@@ -62,6 +62,9 @@ def parse(args) -> dict:
             raise ValueError(f"--limit-cameras: expected more cameras than the largest --cameras "
                              f"({max(cameras)}), got {limit}")
     core.check_discs(max(objects), args.radius)
+    if limit is not None and args.quadrature is not None:       # else unused, and recorded as used
+        raise ValueError(f"--quadrature: the row spacing of the exact limit (--limit-cameras inf); "
+                         f"--limit-cameras {limit} takes none")
     quadrature = args.radius / QUADRATURE_PER_RADIUS if args.quadrature is None else args.quadrature
     if not args.radius / 1000 <= quadrature <= args.radius / 2:     # at least four rows across a disc
         raise ValueError(f"--quadrature: expected a number in [radius / 1000, radius / 2] = "
@@ -74,7 +77,7 @@ def parse(args) -> dict:
             raise ValueError(f"--fit-min: expected an integer in [2, {cameras[-2]}] (at least two --cameras "
                              f"from it on), got {fit_min}")
     return {"objects": objects, "cameras": cameras, "limit_cameras": limit,
-            "radius": float(args.radius), "quadrature": float(quadrature),
+            "radius": float(args.radius), "quadrature": float(quadrature) if limit is None else None,
             "fit_min": int(fit_min)}
 
 
