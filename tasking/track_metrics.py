@@ -20,9 +20,12 @@ def tracking_metrics(truth_ids: Sequence, truth_xy: Sequence, track_ids: Sequenc
     truth_xy, track_xy : per frame, (m_t, 2) and (n_t, 2) float, metres, world frame
     max_distance : metres; a track farther than this from a true object cannot match it
     Returns ``mse`` (mean squared error of matched positions, square metres), ``mota``,
-    ``motp`` (mean matched distance, metres), ``idf1``, ``switches``, ``matches``,
-    ``false_positives`` (track-frames matched to no object) and ``misses`` (object-frames
-    matched to no track): MOTA = 1 - (false_positives + misses + switches) / object-frames.
+    ``motp`` (mean matched distance, metres), ``idf1``, ``switches`` (identity switches),
+    ``matches`` (object-frames matched to a track, the frames of an identity switch
+    included: what ``mse`` and ``motp`` average over), ``false_positives`` (track-frames
+    matched to no object) and ``misses`` (object-frames matched to no track):
+    matches + misses = object-frames, and
+    MOTA = 1 - (false_positives + misses + switches) / object-frames.
 
     >>> m = tracking_metrics([[0]], [[[0.0, 0.0]]], [[5]], [[[0.1, 0.0]]], 0.5)
     >>> round(m["mse"], 6), m["mota"], round(m["motp"], 6)
@@ -40,7 +43,7 @@ def tracking_metrics(truth_ids: Sequence, truth_xy: Sequence, track_ids: Sequenc
         d[d > max_distance**2] = np.nan
         acc.update(list(np.asarray(gid).tolist()), list(np.asarray(hid).tolist()), d)
     summary = mm.metrics.create().compute(
-        acc, metrics=["mota", "motp", "idf1", "num_switches", "num_matches",
+        acc, metrics=["mota", "motp", "idf1", "num_switches",
                       "num_false_positives", "num_misses"], name="run")
     row = summary.iloc[0]
     events = acc.mot_events
@@ -52,7 +55,7 @@ def tracking_metrics(truth_ids: Sequence, truth_xy: Sequence, track_ids: Sequenc
         "motp": float(np.mean(np.sqrt(matched))) if matched.size else float("nan"),
         "idf1": float(row["idf1"]),
         "switches": int(row["num_switches"]),
-        "matches": int(row["num_matches"]),
+        "matches": int(matched.size),        # py-motmetrics' num_matches leaves out the switches
         "false_positives": int(row["num_false_positives"]),
         "misses": int(row["num_misses"]),
     }

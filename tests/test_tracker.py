@@ -125,3 +125,13 @@ def test_metrics_count_false_positives_and_misses():
     m = tracking_metrics(truth_ids, truth_xy, track_ids, track_xy, 0.5)
     assert m["false_positives"] == 1 and m["misses"] == 1 and m["matches"] == 1
     assert m["mota"] == 1 - (m["false_positives"] + m["misses"] + m["switches"]) / 2
+
+
+def test_matches_count_the_switch_frames_that_mse_averages_over():
+    """``matches`` left out the frames of an identity switch (py-motmetrics' num_matches),
+    though ``mse`` and ``motp`` average over them: matches + misses != object-frames."""
+    z = [[0.0, 0.0]]
+    m = tracking_metrics([[0]] * 4, [z] * 4, [[7], [7], [], [8]], [[[0.1, 0.0]], [[0.1, 0.0]], [], [[0.2, 0.0]]], 0.5)
+    assert m["switches"] == 1 and m["misses"] == 1
+    assert m["matches"] == 3                              # frames 0, 1 and the switch frame 3
+    assert m["matches"] + m["misses"] == 4                # every object-frame is one or the other
