@@ -335,3 +335,19 @@ def test_demo_stopped_after_its_video_keeps_the_earlier_demo_whole(tmp_path, mon
     monkeypatch.setattr(topview.TopView, "draw", interrupted)
     assert main(["demo", "--out", str(out), "--frames", "2", "--seed", "2"]) == 130
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before     # no new video, no staged file
+
+
+def test_the_summary_says_which_counts_are_track_frames_and_which_person_frames():
+    """The summary said '(track-frames, ...)' after false positives, misses and id
+    switches alike: misses are person-frames."""
+    from testbed.commands.run import format_summary
+
+    summary = {"scene": "lab", "people": 3, "frames": 2, "tasker": "incremental", "k": 6, "m": 1,
+               "update_every": 1, "hull_area": 1.0, "residual": 0.5, "bits_per_frame": 200.0,
+               "camera_switches": 2,
+               "tracking": {"mse": None, "mota": 0.0, "motp": None, "idf1": 0.0, "switches": 0, "matches": 0,
+                            "false_positives": 4, "misses": 6, "max_distance": 0.75}}
+    text = format_summary(summary)
+    assert "false positives 4 track-frames" in text
+    assert "misses 6 person-frames" in text
+    assert "matched within 0.75 m" in text

@@ -175,6 +175,6 @@ def format_summary(s: dict) -> str:
         num = lambda v, digits: "-" if v is None else f"{v:.{digits}f}"
         lines.append(f"  tracking            MSE {num(t['mse'], 4)} m^2  MOTA {num(t['mota'], 3)}  "
                      f"MOTP {num(t['motp'], 3)} m  IDF1 {num(t['idf1'], 3)}")
-        lines.append(f"                      false positives {t['false_positives']}  misses {t['misses']}  "
-                     f"id switches {t['switches']}  (track-frames, matched within {t['max_distance']:.2f} m)")
+        lines.append(f"                      false positives {t['false_positives']} track-frames  misses {t['misses']} "
+                     f"person-frames  id switches {t['switches']}  (matched within {t['max_distance']:.2f} m)")
     return "\n".join(lines)
