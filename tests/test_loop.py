@@ -351,3 +351,11 @@ def test_the_summary_says_which_counts_are_track_frames_and_which_person_frames(
     assert "false positives 4 track-frames" in text
     assert "misses 6 person-frames" in text
     assert "matched within 0.75 m" in text
+
+
+def test_demo_empty_out_is_refused_not_the_current_folder(tmp_path, capsys, monkeypatch):
+    """--out '' wrote run.mp4, summary.json and topview.png into the current folder."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo", "--out", "", "--frames", "2"]) == 2
+    assert capsys.readouterr().err.strip() == "camtask demo: error: --out: expected a folder name, got ''"
+    assert list(tmp_path.iterdir()) == []

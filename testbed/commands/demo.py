@@ -65,6 +65,8 @@ def check_out_folder(path: str) -> Path:
     any dataset's episode; else a one-line ValueError naming ``--out``."""
     from testbed.output import check_output_file
 
+    if not path:                # Path("") is the current folder
+        raise ValueError(f"--out: expected a folder name, got {path!r}")
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out: {out} exists and is not a folder")
