@@ -104,3 +104,14 @@ def test_tracking_tasks_from_what_feedback_names(monkeypatch, feedback):
     assert len(given) == opts["steps"]
     same = [c.shape == centres[t].shape and np.allclose(c, centres[t]) for t, c in given]
     assert all(same) if feedback == "hull" else not all(same)
+
+
+def test_tracking_figure_titles_say_dash_not_nan_without_a_matched_position(monkeypatch):
+    """A walk whose tracks never matched an object titled its panels '(all objects nan)'
+    while the table says '-' for the same MSE."""
+    titles = []
+    monkeypatch.setattr(tracking, "save_figure", lambda fig, path: titles.extend(a.get_title() for a in fig.axes))
+    opts = {"pairs": [("uniform", 6)], "objects": 2, "steps": 2, "update_every": 1, "m": 1, "radius": 0.1,
+            "speed": 0.3, "feedback": "hull"}
+    tracking.plot({"meta": {"arguments": opts, "seed": 0}, "figure_trial": 0}, "unused.png")
+    assert titles == ["uniform k=6: this track's MSE -\n(all objects -)"]

@@ -162,7 +162,8 @@ def plot(result: dict, path: str) -> None:
         ax.plot(est[:, 0], est[:, 1], "r.-", ms=3, lw=0.8, label="estimated track")
         seen = ~np.isnan(est[:, 0])
         err = f"{np.mean(np.sum((est[seen] - truth[seen]) ** 2, axis=1)):.4f}" if seen.any() else "-"
-        ax.set_title(f"{tasker} k={k}: this track's MSE {err}\n(all objects {ep['mse']:.4f})", fontsize=9)
+        every = f"{ep['mse']:.4f}" if np.isfinite(ep["mse"]) else "-"     # no matched position: as the table
+        ax.set_title(f"{tasker} k={k}: this track's MSE {err}\n(all objects {every})", fontsize=9)
         ax.set_aspect("equal")
         ax.set(xlim=(-1.05, 1.05), ylim=(-1.05, 1.05), xlabel="x (room radii)", ylabel="y (room radii)")
         ax.legend(loc="lower right", fontsize=7)
