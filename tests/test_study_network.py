@@ -53,6 +53,9 @@ def test_both_networks_see_the_same_walk():
 
 @pytest.mark.parametrize("argv, match", [
     (["tracking", "--pairs", "best:4"], "--pairs: expected TASKER:K"),
+    # said only "expected TASKER:K items with TASKER uniform, greedy or incremental"
+    (["tracking", "--pairs", "incremental:0"], "K an integer >= 1, got 'incremental:0'"),
+    (["tracking", "--pairs", "uniform:six"], "K an integer >= 1, got 'uniform:six'"),
     (["tracking", "--pairs", "incremental:17"], "exceeds the 16 candidate cameras"),
     (["tracking", "--steps", "0"], "--steps: expected an integer >= 1"),
     (["tracking", "--pairs", "incremental:4,uniform:4", "--m", "5"],

@@ -50,7 +50,7 @@ def parse(args) -> dict:
         name, _, k = part.strip().partition(":")
         if name not in ("uniform", "incremental", "greedy") or not k.isdigit() or int(k) < 1:
             raise ValueError(f"--pairs: expected TASKER:K items with TASKER uniform, greedy or "
-                             f"incremental, got {part!r}")
+                             f"incremental and K an integer >= 1, got {part!r}")
         if name != "uniform" and int(k) > CANDIDATES:
             raise ValueError(f"--pairs: k = {k} exceeds the {CANDIDATES} candidate cameras")
         core.check_cameras("pairs", int(k))
