@@ -1,7 +1,11 @@
 """What happens in an episode: who is in the scene and where they walk.
 
-Both ``camtask render`` and ``camtask run`` draw the walk the same way, so the same
-scene and seed give the same people on the same paths.
+Both ``camtask render`` and ``camtask run`` draw the walk with :func:`walk`, from the
+first of two generators spawned from a seed (the second draws the sensor noise), so
+the same generator gives the same people on the same paths. ``run`` spawns them from
+``SeedSequence(seed)``, a dataset's episode i from ``SeedSequence(seed, spawn_key=(i,))``
+(:func:`testbed.episodes.episode_seed`): ``run --seed S`` does not walk the paths of
+episode 0 of ``render --seed S``.
 """
 
 from __future__ import annotations
