@@ -359,3 +359,14 @@ def test_demo_empty_out_is_refused_not_the_current_folder(tmp_path, capsys, monk
     assert main(["demo", "--out", "", "--frames", "2"]) == 2
     assert capsys.readouterr().err.strip() == "camtask demo: error: --out: expected a folder name, got ''"
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("name", ["run.mp4", "topview.png", "summary.json"])
+def test_demo_refuses_a_folder_in_the_place_of_one_of_its_files_before_any_work(tmp_path, capsys, name):
+    """A folder named run.mp4 or topview.png in --out failed the demo at its very end,
+    after summary.json (and topview.png) had been replaced: not the three files together."""
+    (tmp_path / name).mkdir()
+    assert main(["demo", "--out", str(tmp_path), "--frames", "2"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"camtask demo: error: --out: {tmp_path / name} is a folder; expected a file name"
+    assert [p.name for p in tmp_path.iterdir()] == [name]

@@ -60,9 +60,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+#: What the demo writes in ``--out``.
+FILES = ("run.mp4", "summary.json", "topview.png")
+
+
 def check_out_folder(path: str) -> Path:
     """``--out`` as a folder that exists or is made, where files can be created, outside
-    any dataset's episode; else a one-line ValueError naming ``--out``."""
+    any dataset's episode, and where none of the demo's three files is a folder or a
+    device (else found at the end only, after the others had been replaced); else a
+    one-line ValueError naming ``--out``."""
     from testbed.output import check_output_file
 
     if not path:                # Path("") is the current folder
@@ -70,6 +76,7 @@ def check_out_folder(path: str) -> Path:
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out: {out} exists and is not a folder")
-    check_output_file("--out", out / "summary.json")     # its folder: made, writable, not in an episode
+    for name in FILES:                  # and its folder: made, writable, not in an episode
+        check_output_file("--out", out / name)
     out.mkdir(parents=True, exist_ok=True)
     return out
