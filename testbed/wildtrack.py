@@ -177,7 +177,6 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
     ``out`` may be a link to a folder (the folder is replaced). Folders made for ``out`` are
     removed again when the export fails.
     """
-    from render.gl import signals_held
     from scene import Scene
     from testbed.parallel import default_workers
 
@@ -195,26 +194,11 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
     P = meta["people"]
     table = people_table(episode / "people.csv", frames, P) if people is None else people
     calib = read_calibrations(episode, numbers)         # before any folder is made
-    tmp = aside = None
+    tmp = None
     with made_folder("OUT", out.parent):        # removed again when the export fails
         try:
             tmp = temp_folder(out.parent, f".{out.name}.")
-            calibrations = tmp / "calibrations"
-            for sub in ("annotations_positions", f"calibrations/{lay.intrinsic}", "calibrations/extrinsic"):
-                (tmp / sub).mkdir(parents=True)
-            maps = {}                              # camera number -> undistortion maps (undistort only)
-            for n in numbers:
-                (tmp / "Image_subsets" / f"C{n}").mkdir(parents=True)
-                c = calib[n]
-                dist = c["dist"].reshape(1, 5)
-                if undistort:
-                    maps[n] = undistort_maps(c["K"], c["dist"], (c["width"], c["height"]))
-                    dist = np.zeros_like(dist)
-                stem = lay.camera.format(n=n)
-                _write_fs(calibrations / lay.intrinsic / f"intr_{stem}.xml", camera_matrix=c["K"],
-                          distortion_coefficients=dist)
-                _write_extrinsic(calibrations / "extrinsic" / f"extr_{stem}.xml", c["rvec"], c["tvec"],
-                                 lay.extrinsic_matrices)
+            maps = _write_calibrations(tmp, lay, calib, undistort)
             # Ctrl-C stops the cameras being exported at their next frame: the pool's shutdown
             # otherwise waited for each running camera's every frame (~9 s for 300 frames)
             stop = threading.Event()
@@ -227,44 +211,89 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
                 except BaseException:
                     stop.set()
                     raise
-            for f in range(frames):
-                rows = table[table["frame"] == f]
-                pids = position_id(np.column_stack([rows["x"], rows["y"]]).astype(float), gw, origin)
-                ann = [{"personID": int(i), "positionID": int(pid),
-                        "views": [{"viewNum": v, "xmin": int(b[f, v, i, 0]), "ymin": int(b[f, v, i, 1]),
-                                   "xmax": int(b[f, v, i, 2]), "ymax": int(b[f, v, i, 3])} for v in range(len(numbers))]}
-                       for i, pid in zip(rows["person_id"], pids, strict=True)]
-                (tmp / "annotations_positions" / f"{f:0{lay.annotation_digits}d}.json").write_text(json.dumps(ann))
+            _write_annotations(tmp / "annotations_positions", lay, table, b, gw, origin)
             (tmp / "grid.json").write_text(json.dumps({
                 "layout": layout, "cell_m": CELL, "origin_m": list(origin), "grid_width": gw, "grid_height": gh,
                 "position_id": "x_index + grid_width * y_index, x_index = floor((x - origin_m[0]) / cell_m), "
                                "y_index = floor((y - origin_m[1]) / cell_m)",
                 "views": {str(v): n for v, n in enumerate(numbers)}, "units": "metres, world frame",
                 "undistorted": bool(undistort), "boxes": box, "source": str(episode)}, indent=1) + "\n")
-            # the earlier export is moved aside whole and deleted once the new one is in place:
-            # deleted first, a Ctrl-C meanwhile left part of it without its grid.json (refused by
-            # --overwrite) and neither export
-            with signals_held():
-                if out.exists():
-                    aside = temp_folder(out.parent, f".{out.name}.replaced-")
-                    os.replace(out, aside)
-                    try:
-                        os.rename(tmp, out)
-                    except BaseException:
-                        os.rename(aside, out)
-                        aside = None
-                        raise
-                else:
-                    os.rename(tmp, out)
-                tmp = None
-            if aside is not None:
-                shutil.rmtree(aside)
+            _replace_folder(tmp, out)
         except BaseException:
-            for left in (tmp, aside):
-                if left is not None:
-                    shutil.rmtree(left, ignore_errors=True)
+            if tmp is not None:
+                shutil.rmtree(tmp, ignore_errors=True)
             raise
     return out
+
+
+def _write_calibrations(tmp: Path, lay: Layout, calib: dict[int, dict], undistort: bool) -> dict:
+    """Make the export's folders in ``tmp`` and write each camera's intrinsic and extrinsic
+    FileStorage XML (zero distortion when ``undistort``); return camera number -> its
+    undistortion maps (empty without ``undistort``)."""
+    calibrations = tmp / "calibrations"
+    for sub in ("annotations_positions", f"calibrations/{lay.intrinsic}", "calibrations/extrinsic"):
+        (tmp / sub).mkdir(parents=True)
+    maps = {}
+    for n, c in calib.items():
+        (tmp / "Image_subsets" / f"C{n}").mkdir(parents=True)
+        dist = c["dist"].reshape(1, 5)
+        if undistort:
+            maps[n] = undistort_maps(c["K"], c["dist"], (c["width"], c["height"]))
+            dist = np.zeros_like(dist)
+        stem = lay.camera.format(n=n)
+        _write_fs(calibrations / lay.intrinsic / f"intr_{stem}.xml", camera_matrix=c["K"],
+                  distortion_coefficients=dist)
+        _write_extrinsic(calibrations / "extrinsic" / f"extr_{stem}.xml", c["rvec"], c["tvec"],
+                         lay.extrinsic_matrices)
+    return maps
+
+
+def _write_annotations(folder: Path, lay: Layout, table: np.ndarray, boxes: np.ndarray, gw: int,
+                       origin) -> None:
+    """One JSON file of people per frame: personID, positionID on the ground grid (``gw``
+    cells wide from ``origin``, metres) and a box per view.
+
+    boxes : (frames, n_cams, P, 4) int pixels, xmin ymin xmax ymax (-1: not seen)
+    """
+    for f in range(len(boxes)):
+        rows = table[table["frame"] == f]
+        pids = position_id(np.column_stack([rows["x"], rows["y"]]).astype(float), gw, origin)
+        ann = [{"personID": int(i), "positionID": int(pid),
+                "views": [{"viewNum": v, "xmin": int(b[0]), "ymin": int(b[1]), "xmax": int(b[2]), "ymax": int(b[3])}
+                          for v, b in enumerate(boxes[f, :, i])]}
+               for i, pid in zip(rows["person_id"], pids, strict=True)]
+        (folder / f"{f:0{lay.annotation_digits}d}.json").write_text(json.dumps(ann))
+
+
+def _replace_folder(new: Path, out: Path) -> None:
+    """Rename folder ``new`` to ``out``, replacing an earlier ``out`` whole.
+
+    The earlier one is moved aside and deleted once the new one is in place: deleted first,
+    a Ctrl-C meanwhile left part of it without its grid.json (refused by --overwrite) and
+    neither export. Signals wait until the renames are done.
+    """
+    from render.gl import signals_held
+
+    aside = None
+    try:
+        with signals_held():
+            if out.exists():
+                aside = temp_folder(out.parent, f".{out.name}.replaced-")
+                os.replace(out, aside)
+                try:
+                    os.rename(new, out)
+                except BaseException:
+                    os.rename(aside, out)
+                    aside = None
+                    raise
+            else:
+                os.rename(new, out)
+        if aside is not None:
+            shutil.rmtree(aside)
+    except BaseException:
+        if aside is not None:
+            shutil.rmtree(aside, ignore_errors=True)
+        raise
 
 
 def read_calibrations(episode: Path, numbers) -> dict[int, dict]:
