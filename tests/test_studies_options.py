@@ -236,3 +236,34 @@ def test_quadrature_is_refused_with_a_camera_limit(capsys):
     assert cli.main(["study", "cameras", "--limit-cameras", "64", "--objects", "2", "--cameras", "4",
                      "--trials", "1", "--workers", "0", "--no-progress", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["meta"]["arguments"]["quadrature"] is None
+
+
+@pytest.mark.parametrize("value", ["0", "-5"])
+def test_max_subsets_is_at_least_one(capsys, value):
+    """--max-subsets -5 ran, and meta.arguments recorded the limit -5."""
+    for taskers in ("uniform,greedy", "optimal"):
+        assert one_line_error(capsys, "static", "--taskers", taskers, "--max-subsets", value, "--k", "2",
+                              "--trials", "1") == f"--max-subsets: expected an integer >= 1, got {value}"
+
+
+def test_max_subsets_is_optimals_alone(capsys):
+    """--max-subsets without optimal was silently unused, and meta.arguments recorded it."""
+    err = one_line_error(capsys, "static", "--taskers", "uniform,greedy", "--max-subsets", "10", "--k", "2",
+                         "--trials", "1")
+    assert err == "--max-subsets: the limit of optimal's subsets; --taskers uniform,greedy runs no optimal"
+    for taskers, recorded in (("uniform,greedy", None), ("optimal", 200_000)):
+        assert cli.main(["study", "static", "--taskers", taskers, "--k", "2", "--candidates", "4", "--objects", "1",
+                         "--trials", "1", "--workers", "0", "--no-progress", "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["meta"]["arguments"]["max_subsets"] == recorded
+
+
+def test_update_every_is_incrementals_alone_in_moving(capsys):
+    """moving's --update-every without incremental was silently unused, and meta.arguments recorded it."""
+    err = one_line_error(capsys, "moving", "--taskers", "uniform,greedy", "--update-every", "2,4", "--k", "2",
+                         "--steps", "2", "--trials", "1")
+    assert err == ("--update-every: incremental's re-tasking periods; --taskers uniform,greedy runs no "
+                   "incremental")
+    for taskers, recorded in (("uniform,greedy", None), ("incremental", [1, 3, 5, 7])):
+        assert cli.main(["study", "moving", "--taskers", taskers, "--k", "2", "--candidates", "4", "--objects", "1",
+                         "--steps", "2", "--trials", "1", "--workers", "0", "--no-progress", "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["meta"]["arguments"]["update_every"] == recorded

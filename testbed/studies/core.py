@@ -192,9 +192,11 @@ def add_taskers(p, default: str, valid) -> None:
 
 def add_update(p, update_every) -> None:
     """``--update-every`` and ``--m``. A string ``update_every``: a list of incremental greedy's
-    periods, one record each (moving); an integer: the one period of every tasker but uniform."""
+    periods, one record each (moving; parsed as None when not given, so that the study can tell
+    a list given without incremental from its default); an integer: the one period of every
+    tasker but uniform."""
     if isinstance(update_every, str):
-        p.add_argument("--update-every", default=update_every,
+        p.add_argument("--update-every", default=None,
                        help=f"incremental re-tasking periods in frames (default {update_every})")
     else:
         p.add_argument("--update-every", type=int, default=update_every,

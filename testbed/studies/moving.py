@@ -28,6 +28,8 @@ CHUNK = 2
 
 #: The taskers this study can compare.
 TASKERS = ("uniform", "greedy", "lazy_greedy", "incremental")
+#: The default of ``--update-every``: the periods of the paper's figure 10.
+UPDATE_EVERY = "1,3,5,7"
 
 
 def add_arguments(p) -> None:
@@ -35,7 +37,7 @@ def add_arguments(p) -> None:
     core.add_k(p, "2-8")
     core.add_candidates(p)
     core.add_taskers(p, "uniform,greedy,incremental", TASKERS)
-    core.add_update(p, "1,3,5,7")
+    core.add_update(p, UPDATE_EVERY)
     core.add_steps(p, 40)
     p.add_argument("--dt", type=float, default=0.1, help="seconds per frame (default 0.1)")
     core.add_speed(p, 0.5)
@@ -48,7 +50,12 @@ def parse(args) -> dict:
     core.check_cameras("candidates", args.candidates)
     ks = core.parse_k(args.k, args.candidates, f"the {args.candidates} candidates")
     taskers = core.parse_names("taskers", args.taskers, TASKERS)
-    us = core.parse_ints("update-every", args.update_every, minimum=1)
+    us = core.parse_ints("update-every", UPDATE_EVERY if args.update_every is None else args.update_every, minimum=1)
+    if "incremental" not in taskers:            # else unused, and recorded as used
+        if args.update_every is not None:
+            raise ValueError(f"--update-every: incremental's re-tasking periods; --taskers {','.join(taskers)} "
+                             "runs no incremental")
+        us = None
     core.check_m(args.m, ks if "incremental" in taskers else [])
     core.check_count("steps", args.steps, 2)
     core.check_bounded("dt", args.dt, 0.0, core.MAX_DT, low_open=True)

@@ -16,6 +16,8 @@ from . import core
 
 STUDY_ID = 1
 CHUNK = 10
+#: The default of ``--max-subsets``: C(16, 8) = 12870 subsets at the paper's largest k, with room.
+MAX_SUBSETS = 200_000
 
 
 #: The taskers this study can compare (incremental needs a previous frame).
@@ -28,8 +30,8 @@ def add_arguments(p) -> None:
     core.add_candidates(p)
     core.add_taskers(p, "uniform,clustering,optimal,greedy", TASKERS)
     core.add_radius(p)
-    p.add_argument("--max-subsets", type=int, default=200_000,
-                   help="refuse 'optimal' beyond this many subsets (default 200000)")
+    p.add_argument("--max-subsets", type=int, default=None,
+                   help=f"refuse 'optimal' beyond this many subsets (default {MAX_SUBSETS})")
 
 
 def parse(args) -> dict:
@@ -38,14 +40,20 @@ def parse(args) -> dict:
     core.check_cameras("candidates", args.candidates)
     ks = core.parse_k(args.k, args.candidates, f"the {args.candidates} candidates")
     taskers = core.parse_names("taskers", args.taskers, TASKERS)
+    max_subsets = MAX_SUBSETS if args.max_subsets is None else core.check_count("max-subsets", args.max_subsets)
+    if "optimal" not in taskers:                # else unused, and recorded as used
+        if args.max_subsets is not None:
+            raise ValueError(f"--max-subsets: the limit of optimal's subsets; --taskers {','.join(taskers)} "
+                             "runs no optimal")
+        max_subsets = None
     worst = max(ks, key=lambda k: comb(args.candidates, k))
-    if "optimal" in taskers and comb(args.candidates, worst) > args.max_subsets:
+    if max_subsets is not None and comb(args.candidates, worst) > max_subsets:
         raise ValueError(f"--taskers: optimal would compare C({args.candidates}, {worst}) = "
                          f"{comb(args.candidates, worst)} subsets of cameras per trial, more than --max-subsets "
-                         f"{args.max_subsets}")
+                         f"{max_subsets}")
     radius = core.check_discs(args.objects, args.radius)
     return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),
-            "taskers": taskers, "radius": radius, "max_subsets": int(args.max_subsets)}
+            "taskers": taskers, "radius": radius, "max_subsets": max_subsets}
 
 
 def run_trials(start, stop, opts, seed) -> np.ndarray:
@@ -60,8 +68,8 @@ def run_trials(start, stop, opts, seed) -> np.ndarray:
         centers = random_drop(room, np.full(opts["objects"], r), core.trial_rng(seed, STUDY_ID, 0, t))
         for i, tasker in enumerate(opts["taskers"]):
             for j, k in enumerate(opts["k"]):
-                S = core.choose_cameras(tasker, k, xy, yaw, core.FOV, centers, r, room,
-                                        max_subsets=opts["max_subsets"],
+                limit = {"max_subsets": opts["max_subsets"]} if tasker == "optimal" else {}
+                S = core.choose_cameras(tasker, k, xy, yaw, core.FOV, centers, r, room, **limit,
                                         # keyed by the tasker's name, not its place in --taskers
                                         rng=core.trial_rng(seed, STUDY_ID, 1 + core.TASKERS.index(tasker), k, t))
                 out[t - start, i, j] = core.hull_residual(xy[S], yaw[S], centers, r, room)[1]
