@@ -1,7 +1,7 @@
 """Refusing, before any work, a run whose size the memory available cannot hold.
 
 Commands that keep something per frame or per trial until they end (``run``, ``demo``,
-``study lab``, ``tune``) check its size here, in one line naming the option and the most
+``study lab``, ``study tracking``, ``tune``) check its size here, in one line naming the option and the most
 that fits, instead of filling the memory hours later.
 """
 

@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-from testbed import cli
+from testbed import cli, memory
 from testbed.commands import study as study_command
 from testbed.studies import cameras, lab, moving, static, tracking
 
@@ -267,3 +267,22 @@ def test_update_every_is_incrementals_alone_in_moving(capsys):
         assert cli.main(["study", "moving", "--taskers", taskers, "--k", "2", "--candidates", "4", "--objects", "1",
                          "--steps", "2", "--trials", "1", "--workers", "0", "--no-progress", "--json"]) == 0
         assert json.loads(capsys.readouterr().out)["meta"]["arguments"]["update_every"] == recorded
+
+
+def test_tracking_refuses_an_episode_longer_than_the_memory(monkeypatch, capsys):
+    """--steps 10**9 walked for hours (py-motmetrics keeps every step's events), then filled
+    the memory; it is refused before any trial, by the memory available and --objects."""
+    monkeypatch.setattr(memory, "available_memory", lambda: 2_000_000_000)
+    monkeypatch.setattr(tracking, "run_trial", lambda *a: pytest.fail("a trial ran"))
+    per_step = tracking.STEP_BYTES + 6 * tracking.OBJECT_BYTES
+    err = one_line_error(capsys, "tracking", "--steps", str(10**9), "--trials", "1")
+    assert err == (f"--steps: 1000000000 steps would hold about {memory.gigabytes(10**9 * per_step)} of memory in "
+                   "each episode (the walk, its tracks and py-motmetrics' events of every step), more than the 2 GB "
+                   f"available; expected at most {2_000_000_000 // per_step} steps here")
+    most = 2_000_000_000 // (tracking.STEP_BYTES + 30 * tracking.OBJECT_BYTES)
+    assert f"expected at most {most} steps" in one_line_error(capsys, "tracking", "--steps", str(most + 1),
+                                                              "--objects", "30", "--trials", "1")
+    args = parsed("tracking", "--steps", str(most), "--objects", "30")
+    assert tracking.parse(args)["steps"] == most
+    # the documented runs (docs/results.md: 150 steps) are far from the bound
+    assert tracking.parse(parsed("tracking"))["steps"] == 150 < most

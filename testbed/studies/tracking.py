@@ -21,6 +21,7 @@ import numpy as np
 from scene.motion import random_waypoint
 from tasking.track_metrics import tracking_metrics
 from tasking.tracker import Tracker, TrackerParams
+from testbed.memory import check_fits
 from testbed.output import save_figure
 
 from . import core
@@ -30,6 +31,11 @@ DEFAULT_TRIALS = 20
 CANDIDATES = 16
 DT = 1 / 7.5
 SPEED = 0.3          # room radii per second: 0.04 per frame at 7.5 Hz
+#: Memory an episode holds until it is scored, per step: a fixed part and a part per object
+#: (the walk, the tracks, and py-motmetrics' event table, which dominates). Measured (tracemalloc
+#: peak of one episode; maxrss growth in brackets) 1.2 kB a step with 1 object, 5.0-5.9 (5.4)
+#: with 6, 13.7-14.1 (18.6) with 30 and 44 with 100 (radius 0.05), 2 to 16 cameras; these err above.
+STEP_BYTES, OBJECT_BYTES = 2000, 1000
 
 
 def add_arguments(p) -> None:
@@ -58,6 +64,9 @@ def parse(args) -> dict:
     for name in ("objects", "steps", "update_every", "m"):
         core.check_count(name.replace("_", "-"), getattr(args, name))
     radius = core.check_discs(args.objects, args.radius)
+    # before any trial: --steps 10**9 walked for hours, then filled the memory
+    check_fits("--steps", args.steps, "steps", STEP_BYTES + OBJECT_BYTES * args.objects,
+               "in each episode (the walk, its tracks and py-motmetrics' events of every step)")
     core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED, low_open=True)
     core.check_m(args.m, [k for name, k in pairs if name == "incremental"])
     return {"pairs": pairs, "objects": args.objects, "steps": args.steps,
