@@ -103,22 +103,23 @@ class PipelineParams:
         return cls(**dict(values))
 
     @classmethod
-    def from_yaml(cls, path: str | os.PathLike) -> PipelineParams:
-        """Parameters from a YAML file (a mapping at top level, or under a ``pipeline`` key)."""
-        text = read_input_text("params", path)
+    def from_yaml(cls, path: str | os.PathLike, name: str = "params") -> PipelineParams:
+        """Parameters from a YAML file (a mapping at top level, or under a ``pipeline`` key);
+        an error names ``name`` (a command passes its option, ``--params``), then the file."""
+        text = read_input_text(name, path)
         try:
             data = yamlio.load(text)
         except yaml.YAMLError as exc:
-            raise ValueError(f"params: {path} is not valid YAML ({yamlio.error_text(exc)})") from None
+            raise ValueError(f"{name}: {path} is not valid YAML ({yamlio.error_text(exc)})") from None
         if isinstance(data, Mapping) and set(data) == {"pipeline"}:
             data = data["pipeline"]
         if data is not None and not isinstance(data, Mapping):        # empty: the defaults
-            raise ValueError(f"params: {str(path)!r}: expected a mapping of pipeline parameters "
+            raise ValueError(f"{name}: {str(path)!r}: expected a mapping of pipeline parameters "
                              f"(key: value lines), got {type(data).__name__}")
         try:
             return cls.from_mapping(data)
         except ValueError as exc:               # name the file: a bad value would not say where it is
-            raise ValueError(f"params: {str(path)!r}: {exc}") from None
+            raise ValueError(f"{name}: {str(path)!r}: {exc}") from None
 
     def to_dict(self) -> dict:
         """Plain dict of the parameters (YAML/JSON friendly)."""
@@ -135,6 +136,7 @@ class PipelineParams:
         write_atomic(path, text.encode())
 
 
-def load_params(path: str | os.PathLike | None = None) -> PipelineParams:
-    """Parameters from ``path``, or the defaults in ``assets/pipeline/default.yaml``."""
-    return PipelineParams.from_yaml(DEFAULT_PATH if path is None else path)
+def load_params(path: str | os.PathLike | None = None, name: str = "params") -> PipelineParams:
+    """Parameters from ``path``, or the defaults in ``assets/pipeline/default.yaml``; an
+    error names ``name`` (the option that gave ``path``, e.g. ``--params``)."""
+    return PipelineParams.from_yaml(DEFAULT_PATH if path is None else path, name)

@@ -190,3 +190,25 @@ def test_lenses_that_fold_over_or_cannot_be_levelled_are_refused_in_one_line(cam
     check_rectifiable([lab_like()])              # the lab's own lens
     with pytest.raises(ValueError, match=match):
         check_rectifiable([camera])
+
+
+@pytest.mark.parametrize("argv", [
+    ["render", "lab", "--frames", "1"], ["run", "lab", "--frames", "1"], ["scanlines", "DIR"],
+    ["tune", "DIR", "--trials", "1"], ["study", "lab", "--trials", "1", "--workers", "0", "--no-progress"],
+])
+def test_every_command_names_the_params_option_the_user_typed(tmp_path, capsys, argv):
+    """Each command said 'params: ...' of a bad --params file, not the option's name."""
+    from testbed import cli
+
+    argv = [str(tmp_path / "out") if a == "DIR" else a for a in argv]
+    if argv[0] == "render":
+        argv += ["--out", str(tmp_path / "out")]
+    bad, folder, missing = tmp_path / "bad.yaml", tmp_path / "folder.yaml", tmp_path / "missing.yaml"
+    bad.write_text("median_kernel: 4\n")
+    folder.mkdir()
+    for path, why in ((bad, "median_kernel: expected an odd integer in 1..8191, got 4"),
+                      (folder, "is a folder, not a file"), (missing, "no such file")):
+        assert cli.main([*argv, "--params", str(path)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"camtask {argv[0]}: error: --params: ") and why in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()

@@ -84,7 +84,7 @@ def build_config(args: argparse.Namespace):
         raise ValueError(f"--workers: expected an integer >= 0, got {args.workers}")
     config = with_scene_text(EpisodeConfig(scene=args.scene, people=args.people, cameras=parse_cameras(args.cameras),
                                            frames=args.frames, seed=args.seed, fmt=args.format,
-                                           params=load_params(args.params).to_dict()))
+                                           params=load_params(args.params, "--params").to_dict()))
     scene = load_episode_scene(config)
     check_renderable(scene, "scene")
     check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])

@@ -85,7 +85,7 @@ def prepare(args):
     check_people_renderable(scene, "--people" if args.people is not None else f"people.count of {args.scene}")
     config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback, args.near_field).check(
         len(scene.cameras), as_options=True)
-    params = load_params(args.params)
+    params = load_params(args.params, "--params")
     check_column_threshold(params.column_threshold, scene.cameras, "--params")
     check_frames_fit(args.frames, config.k, scene.people.count)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)

@@ -52,7 +52,7 @@ def run(args) -> int:
     from testbed.cli import UsageError
     from testbed.output import check_output_file
 
-    params = load_params(args.params)
+    params = load_params(args.params, "--params")
     if args.out is not None:
         check_output_file("--out", args.out)
     if args.frames is not None and args.frames < 1:

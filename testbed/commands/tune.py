@@ -52,7 +52,7 @@ def run(args) -> int:
     check_seed(args.seed)
     if args.plot is not None:
         check_output_file("--plot", args.plot, ".png")
-    start = load_params(args.params)
+    start = load_params(args.params, "--params")
     for name, (value, low, high) in outside_space(start).items():
         print(f"warning: --params: {name} {value:g} is outside the searched range {low:g}..{high:g}: the first "
               "trial uses it, the others search the range (docs/pipeline.md)", file=sys.stderr)

@@ -52,7 +52,7 @@ def parse(args) -> dict:
     for name in ("frames", "m", "update_every"):
         core.check_count(name.replace("_", "-"), getattr(args, name))
     core.check_m(args.m, ks if "incremental" in taskers else [])
-    check_column_threshold(load_params(args.params).column_threshold, scene.cameras, "--params")
+    check_column_threshold(load_params(args.params, "--params").column_threshold, scene.cameras, "--params")
     # a trial keeps every camera's scanline of every frame (stacked: twice, for a moment)
     check_fits("--frames", args.frames, "frames", 2 * sum(c.width for c in scene.cameras) + 16 * args.people,
                "in each trial (every camera's scanlines of every frame)")
@@ -83,7 +83,7 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
     scene = with_people(load_scene(opts["scene"]), opts["people"])
     motion_rng, sensor_rng = core.trial_rng(seed, STUDY_ID, trial).spawn(2)
     truth = walk(scene, opts["frames"], motion_rng)
-    scans, bearings, near, far = render_scanlines(scene, load_params(opts["params"]), truth, sensor_rng)
+    scans, bearings, near, far = render_scanlines(scene, load_params(opts["params"], "--params"), truth, sensor_rng)
     source = PrecomputedSource(scans, bearings, near, far)
     n = len(scene.cameras)
     near_field = opts.get("near_field", True)
