@@ -286,3 +286,13 @@ def test_tracking_refuses_an_episode_longer_than_the_memory(monkeypatch, capsys)
     assert tracking.parse(args)["steps"] == most
     # the documented runs (docs/results.md: 150 steps) are far from the bound
     assert tracking.parse(parsed("tracking"))["steps"] == 150 < most
+
+
+@pytest.mark.parametrize("argv", [("cameras", "--cameras", "4"), ("static", "--k", "2"),
+                                  ("moving", "--k", "2", "--steps", "2"), ("tracking", "--steps", "2")])
+def test_a_crowded_drop_names_objects_and_radius(capsys, argv):
+    """60 discs of radius 0.1 pass the area check (at most 100) but no random drop places them:
+    the error said 'radii: could not drop ...', naming no option."""
+    err = one_line_error(capsys, *argv, "--objects", "60", "--radius", "0.1", "--trials", "1")
+    assert re.fullmatch(r"--objects 60 with --radius 0\.1: could not drop 60 non-overlapping discs in the room "
+                        r"\(gave up on disc \d+ after 2000 tries\); the room is too crowded", err), err

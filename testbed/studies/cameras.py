@@ -93,7 +93,8 @@ def run_trials(m, start, stop, cameras, limit_cameras, radius, h, seed) -> np.nd
     out = np.empty((stop - start, len(cameras) + 1, 2))
     obj = np.pi * radius**2
     for t in range(start, stop):
-        centers = random_drop(room, np.full(m, radius), core.trial_rng(seed, STUDY_ID, m, t))
+        with core.crowding(m, radius):
+            centers = random_drop(room, np.full(m, radius), core.trial_rng(seed, STUDY_ID, m, t))
         for j, n in enumerate(cameras):
             xy, yaw = core.circle_cameras(n)
             out[t - start, j] = core.hull_residual(xy, yaw, centers, radius, room)[:2]

@@ -12,6 +12,7 @@ The occupancy core comes from :mod:`tasking` (``visual_hull_of_discs``,
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from functools import lru_cache
 
 import numpy as np
@@ -227,6 +228,20 @@ def check_discs(objects: int, radius: float) -> float:
         raise ValueError(f"--radius: expected a number in (0, 0.5), got {radius}")
     check_objects("objects", objects, radius)
     return float(radius)
+
+
+@contextmanager
+def crowding(objects: int, radius: float):
+    """Re-raise :mod:`scene.motion`'s ``radii: ...`` errors (a room that passed
+    :func:`check_objects` by area but too crowded for a random drop) naming the options:
+    ``--objects 60 with --radius 0.1: could not drop ...``."""
+    try:
+        yield
+    except ValueError as exc:
+        text = str(exc)
+        if not text.startswith("radii: "):
+            raise
+        raise ValueError(f"--objects {objects} with --radius {radius:g}: {text.removeprefix('radii: ')}") from None
 
 
 def parse_k(text, most: int, of: str) -> list[int]:

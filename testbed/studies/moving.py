@@ -86,8 +86,9 @@ def run_trials(start, stop, opts, seed) -> np.ndarray:
     sets = settings(opts)
     out = np.empty((stop - start, len(sets)))
     for t in range(start, stop):
-        traj = random_waypoint(room, np.full(opts["objects"], r), opts["steps"], opts["dt"],
-                               opts["speed"], core.trial_rng(seed, STUDY_ID, 0, t))
+        with core.crowding(opts["objects"], r):
+            traj = random_waypoint(room, np.full(opts["objects"], r), opts["steps"], opts["dt"],
+                                   opts["speed"], core.trial_rng(seed, STUDY_ID, 0, t))
         for s, (tasker, k, u) in enumerate(sets):
             S = core.choose_cameras("uniform", k, xy, yaw, core.FOV, traj[0], r, room)
             polys = core.hull_residual(xy[S], yaw[S], traj[0], r, room)[2]

@@ -65,7 +65,8 @@ def run_trials(start, stop, opts, seed) -> np.ndarray:
     r = opts["radius"]
     out = np.empty((stop - start, len(opts["taskers"]), len(opts["k"])))
     for t in range(start, stop):
-        centers = random_drop(room, np.full(opts["objects"], r), core.trial_rng(seed, STUDY_ID, 0, t))
+        with core.crowding(opts["objects"], r):
+            centers = random_drop(room, np.full(opts["objects"], r), core.trial_rng(seed, STUDY_ID, 0, t))
         for i, tasker in enumerate(opts["taskers"]):
             for j, k in enumerate(opts["k"]):
                 limit = {"max_subsets": opts["max_subsets"]} if tasker == "optimal" else {}

@@ -86,8 +86,9 @@ def run_episode(tasker: str, k: int, opts: dict, seed: int, trial: int) -> dict:
     r = opts["radius"]
     room = core.circle_room(1.0)
     radii = np.full(opts["objects"], r)
-    truth = random_waypoint(room, radii, opts["steps"], DT, opts["speed"],
-                            core.trial_rng(seed, STUDY_ID, trial))
+    with core.crowding(opts["objects"], r):
+        truth = random_waypoint(room, radii, opts["steps"], DT, opts["speed"],
+                                core.trial_rng(seed, STUDY_ID, trial))
     if tasker == "uniform":
         xy, yaw = core.circle_cameras(k)
         chosen = np.arange(k)
