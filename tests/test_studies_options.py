@@ -296,3 +296,20 @@ def test_a_crowded_drop_names_objects_and_radius(capsys, argv):
     err = one_line_error(capsys, *argv, "--objects", "60", "--radius", "0.1", "--trials", "1")
     assert re.fullmatch(r"--objects 60 with --radius 0\.1: could not drop 60 non-overlapping discs in the room "
                         r"\(gave up on disc \d+ after 2000 tries\); the room is too crowded", err), err
+
+
+def test_update_every_is_refused_where_every_tasker_is_uniform(capsys):
+    """lab's and tracking's --update-every with uniform alone (which never re-tasks) was silently
+    unused, and meta.arguments recorded it."""
+    for argv, taskers in ((("lab", "--taskers", "uniform"), "uniform"),
+                          (("tracking", "--pairs", "uniform:4,uniform:6"), "uniform")):
+        assert one_line_error(capsys, *argv, "--update-every", "3", "--trials", "1") == (
+            f"--update-every: the re-tasking period of every tasker but uniform; {taskers} alone never re-tasks")
+    assert lab.parse(parsed("lab", "--taskers", "uniform"))["update_every"] is None
+    assert lab.parse(parsed("lab", "--taskers", "uniform,greedy", "--update-every", "3"))["update_every"] == 3
+    assert lab.parse(parsed("lab"))["update_every"] == 1
+    assert tracking.parse(parsed("tracking", "--pairs", "uniform:4"))["update_every"] is None
+    assert tracking.parse(parsed("tracking", "--pairs", "greedy:4", "--update-every", "2"))["update_every"] == 2
+    assert cli.main(["study", "tracking", "--pairs", "uniform:4", "--steps", "3", "--trials", "1", "--workers", "0",
+                     "--no-progress", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["meta"]["arguments"]["update_every"] is None

@@ -193,14 +193,14 @@ def add_taskers(p, default: str, valid) -> None:
 
 def add_update(p, update_every) -> None:
     """``--update-every`` and ``--m``. A string ``update_every``: a list of incremental greedy's
-    periods, one record each (moving; parsed as None when not given, so that the study can tell
-    a list given without incremental from its default); an integer: the one period of every
-    tasker but uniform."""
+    periods, one record each (moving); an integer: the one period of every tasker but uniform
+    (lab, tracking, checked by :func:`check_period`). Either is parsed as None when not given,
+    so that a study can tell a value given to no tasker that uses it from its default."""
     if isinstance(update_every, str):
         p.add_argument("--update-every", default=None,
                        help=f"incremental re-tasking periods in frames (default {update_every})")
     else:
-        p.add_argument("--update-every", type=int, default=update_every,
+        p.add_argument("--update-every", type=int, default=None,
                        help=f"re-tasking period in frames, of every tasker but uniform (default {update_every})")
     p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
 
@@ -251,6 +251,19 @@ def parse_k(text, most: int, of: str) -> list[int]:
     if max(ks) > most:
         raise ValueError(f"--k: {max(ks)} cameras exceed {of}")
     return ks
+
+
+def check_period(value: int | None, default: int, taskers) -> int | None:
+    """lab's and tracking's ``--update-every`` (``value``; None when not given: ``default``),
+    at least 1. Uniform never re-tasks: with no other tasker among ``taskers`` a given value
+    is refused, and the period is None (recorded so, not as a period nothing used)."""
+    period = default if value is None else check_count("update-every", value)
+    if all(t == "uniform" for t in taskers):
+        if value is not None:
+            raise ValueError(f"--update-every: the re-tasking period of every tasker but uniform; "
+                             f"{', '.join(dict.fromkeys(taskers))} alone never re-tasks")
+        return None
+    return period
 
 
 def check_m(m: int, ks) -> int:

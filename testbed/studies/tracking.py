@@ -61,8 +61,9 @@ def parse(args) -> dict:
             raise ValueError(f"--pairs: k = {k} exceeds the {CANDIDATES} candidate cameras")
         core.check_cameras("pairs", int(k))
         pairs.append((name, int(k)))
-    for name in ("objects", "steps", "update_every", "m"):
-        core.check_count(name.replace("_", "-"), getattr(args, name))
+    for name in ("objects", "steps", "m"):
+        core.check_count(name, getattr(args, name))
+    update_every = core.check_period(args.update_every, 1, [name for name, _ in pairs])
     radius = core.check_discs(args.objects, args.radius)
     # before any trial: --steps 10**9 walked for hours, then filled the memory
     check_fits("--steps", args.steps, "steps", STEP_BYTES + OBJECT_BYTES * args.objects,
@@ -70,7 +71,7 @@ def parse(args) -> dict:
     core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED, low_open=True)
     core.check_m(args.m, [k for name, k in pairs if name == "incremental"])
     return {"pairs": pairs, "objects": args.objects, "steps": args.steps,
-            "update_every": args.update_every, "m": args.m, "radius": radius, "speed": args.speed,
+            "update_every": update_every, "m": args.m, "radius": radius, "speed": args.speed,
             "feedback": args.feedback}
 
 
