@@ -66,7 +66,11 @@ def test_a_shared_option_has_one_error_in_every_study(capsys, name):
     ("tracking", "--pairs", "uniform:4", "--m", "0"),
 ])
 def test_m_is_at_least_one_in_every_study(capsys, argv):
-    assert one_line_error(capsys, *argv) == "--m: expected an integer >= 1, got 0"
+    assert one_line_error(capsys, *argv) == (
+        "--m: the cameras incremental greedy swaps per update; no incremental tasker runs (got --m 0)")
+    with_incremental = [a.replace("uniform:4", "incremental:4").replace("uniform,greedy", "incremental")
+                        for a in argv]
+    assert one_line_error(capsys, *with_incremental) == "--m: expected an integer >= 1, got 0"
 
 
 def test_m_larger_than_k_is_refused_alike_where_incremental_runs(capsys):
@@ -81,18 +85,22 @@ def parsed(*argv):
 
 
 def test_lab_m_is_incremental_greedys_alone():
-    """moving and tracking ignore --m without incremental; lab refused --m 7 with k = 6 greedy."""
-    opts = lab.parse(parsed("lab", "--k", "6", "--taskers", "uniform,greedy", "--m", "7"))
-    assert opts["m"] == 7 and opts["taskers"] == ["uniform", "greedy"]
+    """lab refused --m 7 with k = 6 greedy, as if greedy swapped cameras; --m is bounded by incremental's
+    k alone, and refused where no incremental runs."""
+    with pytest.raises(ValueError, match=r"^--m: the cameras incremental greedy swaps per update; no incremental"):
+        lab.parse(parsed("lab", "--k", "6", "--taskers", "uniform,greedy", "--m", "7"))
     with pytest.raises(ValueError, match=r"^--m: expected at most the smallest incremental k = 6, got 7$"):
         lab.parse(parsed("lab", "--k", "6,8", "--taskers", "greedy,incremental", "--m", "7"))
+    assert lab.parse(parsed("lab", "--k", "6,8", "--taskers", "greedy,incremental", "--m", "6"))["m"] == 6
 
 
 @pytest.mark.render
-def test_lab_runs_greedy_with_an_m_larger_than_k(capsys):
-    assert cli.main(["study", "lab", "--people", "1", "--k", "2", "--taskers", "greedy", "--m", "3",
+def test_lab_runs_greedy_without_an_m(capsys):
+    """No incremental tasker: m is null in meta.arguments, and greedy runs with its one swap set."""
+    assert cli.main(["study", "lab", "--people", "1", "--k", "2", "--taskers", "greedy", "--json",
                      "--frames", "2", "--trials", "1", "--workers", "0", "--no-progress"]) == 0
-    assert "greedy" in capsys.readouterr().out
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["meta"]["arguments"]["m"] is None and {r["tasker"] for r in doc["records"]} == {"greedy"}
 
 
 @pytest.mark.parametrize("value", ["-5", "0", "1", "9", "16", "10000000000000000000000"])
@@ -313,3 +321,23 @@ def test_update_every_is_refused_where_every_tasker_is_uniform(capsys):
     assert cli.main(["study", "tracking", "--pairs", "uniform:4", "--steps", "3", "--trials", "1", "--workers", "0",
                      "--no-progress", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["meta"]["arguments"]["update_every"] is None
+
+
+def test_m_is_refused_where_no_tasker_is_incremental(capsys):
+    """--m with no incremental tasker was silently unused, and meta.arguments recorded it as the swaps made."""
+    for argv in (("moving", "--k", "2,4", "--taskers", "uniform,greedy", "--steps", "3"),
+                 ("tracking", "--pairs", "greedy:3,uniform:4", "--steps", "5"),
+                 ("lab", "--taskers", "uniform,greedy", "--frames", "2")):
+        assert one_line_error(capsys, *argv, "--m", "3", "--trials", "1") == (
+            "--m: the cameras incremental greedy swaps per update; no incremental tasker runs (got --m 3)")
+    assert moving.parse(parsed("moving", "--taskers", "uniform,greedy"))["m"] is None
+    assert moving.parse(parsed("moving"))["m"] == 1
+    assert moving.parse(parsed("moving", "--m", "2"))["m"] == 2
+    assert tracking.parse(parsed("tracking", "--pairs", "greedy:4"))["m"] is None
+    assert tracking.parse(parsed("tracking", "--pairs", "incremental:4", "--m", "3"))["m"] == 3
+    assert lab.parse(parsed("lab", "--taskers", "greedy"))["m"] is None
+    assert lab.parse(parsed("lab"))["m"] == 1
+    # still bounded by the smallest incremental k, and at least 1
+    assert one_line_error(capsys, "moving", "--k", "2,4", "--m", "3", "--trials", "1") == (
+        "--m: expected at most the smallest incremental k = 2, got 3")
+    assert one_line_error(capsys, "moving", "--m", "0", "--trials", "1") == "--m: expected an integer >= 1, got 0"

@@ -202,7 +202,7 @@ def add_update(p, update_every) -> None:
     else:
         p.add_argument("--update-every", type=int, default=None,
                        help=f"re-tasking period in frames, of every tasker but uniform (default {update_every})")
-    p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
+    p.add_argument("--m", type=int, default=None, help="cameras swapped per incremental update (default 1)")
 
 
 def add_steps(p, default: int, note: str = "") -> None:
@@ -266,11 +266,17 @@ def check_period(value: int | None, default: int, taskers) -> int | None:
     return period
 
 
-def check_m(m: int, ks) -> int:
-    """``--m`` >= 1, and at most the smallest of ``ks``, the k that incremental greedy runs
-    with (empty: no incremental tasker, and ``--m`` is used by none)."""
-    check_count("m", m)
-    if len(ks) and m > min(ks):
+def check_m(m: int | None, ks) -> int | None:
+    """``--m`` (None when not given: 1), at least 1 and at most the smallest of ``ks``, the k
+    that incremental greedy runs with. Empty ``ks``: no incremental tasker uses ``--m``, so a
+    given value is refused and the result is None (recorded so, not as swaps nobody made)."""
+    if not len(ks):
+        if m is not None:
+            raise ValueError(f"--m: the cameras incremental greedy swaps per update; no incremental tasker "
+                             f"runs (got --m {m})")
+        return None
+    m = 1 if m is None else check_count("m", m)
+    if m > min(ks):
         raise ValueError(f"--m: expected at most the smallest incremental k = {min(ks)}, got {m}")
     return int(m)
 

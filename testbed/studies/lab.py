@@ -49,16 +49,15 @@ def parse(args) -> dict:
     check_people_renderable(scene, "--people")
     ks = core.parse_k(args.k, len(scene.cameras), f"the scene's {len(scene.cameras)}")
     taskers = core.parse_names("taskers", args.taskers, TASKERS)
-    for name in ("frames", "m"):
-        core.check_count(name, getattr(args, name))
+    core.check_count("frames", args.frames)
     update_every = core.check_period(args.update_every, 1, taskers)
-    core.check_m(args.m, ks if "incremental" in taskers else [])
+    m = core.check_m(args.m, ks if "incremental" in taskers else [])
     check_column_threshold(load_params(args.params, "--params").column_threshold, scene.cameras, "--params")
     # a trial keeps every camera's scanline of every frame (stacked: twice, for a moment)
     check_fits("--frames", args.frames, "frames", 2 * sum(c.width for c in scene.cameras) + 16 * args.people,
                "in each trial (every camera's scanlines of every frame)")
     return {"scene": args.scene, "people": args.people, "k": ks, "taskers": taskers,
-            "frames": args.frames, "m": args.m, "update_every": update_every, "params": args.params,
+            "frames": args.frames, "m": m, "update_every": update_every, "params": args.params,
             "near_field": args.near_field}
 
 

@@ -56,13 +56,13 @@ def parse(args) -> dict:
             raise ValueError(f"--update-every: incremental's re-tasking periods; --taskers {','.join(taskers)} "
                              "runs no incremental")
         us = None
-    core.check_m(args.m, ks if "incremental" in taskers else [])
+    m = core.check_m(args.m, ks if "incremental" in taskers else [])
     core.check_count("steps", args.steps, 2)
     core.check_bounded("dt", args.dt, 0.0, core.MAX_DT, low_open=True)
     core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED)
     radius = core.check_discs(args.objects, args.radius)
     return {"objects": int(args.objects), "k": ks, "candidates": int(args.candidates),
-            "taskers": taskers, "update_every": us, "m": int(args.m), "steps": int(args.steps),
+            "taskers": taskers, "update_every": us, "m": m, "steps": int(args.steps),
             "dt": float(args.dt), "speed": float(args.speed), "radius": radius}
 
 

@@ -61,7 +61,7 @@ def parse(args) -> dict:
             raise ValueError(f"--pairs: k = {k} exceeds the {CANDIDATES} candidate cameras")
         core.check_cameras("pairs", int(k))
         pairs.append((name, int(k)))
-    for name in ("objects", "steps", "m"):
+    for name in ("objects", "steps"):
         core.check_count(name, getattr(args, name))
     update_every = core.check_period(args.update_every, 1, [name for name, _ in pairs])
     radius = core.check_discs(args.objects, args.radius)
@@ -69,9 +69,9 @@ def parse(args) -> dict:
     check_fits("--steps", args.steps, "steps", STEP_BYTES + OBJECT_BYTES * args.objects,
                "in each episode (the walk, its tracks and py-motmetrics' events of every step)")
     core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED, low_open=True)
-    core.check_m(args.m, [k for name, k in pairs if name == "incremental"])
+    m = core.check_m(args.m, [k for name, k in pairs if name == "incremental"])
     return {"pairs": pairs, "objects": args.objects, "steps": args.steps,
-            "update_every": update_every, "m": args.m, "radius": radius, "speed": args.speed,
+            "update_every": update_every, "m": m, "radius": radius, "speed": args.speed,
             "feedback": args.feedback}
 
 
