@@ -39,7 +39,7 @@ def test_position_ids_decode_to_the_cell_of_every_point_of_the_room(room, u, v):
 
 
 @pytest.mark.render
-def test_export_wildtrack(tmp_path, capsys):
+def test_export_wildtrack(tmp_path, capsys, monkeypatch):
     data, out = tmp_path / "data", tmp_path / "wild"
     assert main(["render", "lab", "--frames", "2", "--seed", "9", "--cameras", "1,6,12", "--out", str(data),
                  "--workers", "0"]) == 0
@@ -48,6 +48,11 @@ def test_export_wildtrack(tmp_path, capsys):
     grid = json.loads((out / "grid.json").read_text())
     assert grid["grid_width"] == 269 and grid["grid_height"] == 232 and grid["origin_m"] == [0.0, 0.0]
     assert grid["views"] == {"0": 1, "1": 6, "2": 12}
+    assert grid["source"] == str(ep.resolve())
+    # the episode given as "." from inside it: the same source, not "." (which names nothing elsewhere)
+    monkeypatch.chdir(ep)
+    assert main(["export", "wildtrack", ".", str(tmp_path / "wild2")]) == 0
+    assert json.loads((tmp_path / "wild2" / "grid.json").read_text()) == grid
     people = read_people(ep / "people.csv")
     for f in (0, 1):
         ann = json.loads((out / "annotations_positions" / f"{f:08d}.json").read_text())
