@@ -391,8 +391,9 @@ class _Frames:
         if "frames" not in self.images:
             from testbed.lossless import VideoWriter
             (tmp / "frames").mkdir()
-            self.videos = [VideoWriter(tmp / "frames" / f"{c.name}.mkv", renderer.width, renderer.height,
-                                       frame_rate) for c in self.cameras]
+            for c in self.cameras:                # one by one: those started are closed if a later one fails
+                self.videos.append(VideoWriter(tmp / "frames" / f"{c.name}.mkv", renderer.width, renderer.height,
+                                               frame_rate))
 
     def consume(self, f: int, fr, sil) -> None:
         """Write frame f's images, then run the node pipeline, ground truth and hull."""
@@ -512,7 +513,11 @@ def render_episode(config: EpisodeConfig, index: int, out: str, progress=None,
     tmp = temp_folder(out, f".{name}.")
     try:
         frames = _Frames(tmp, config, scene, renderer, pipe, track, spent)
-        frames.start(renderer, backgrounds, scene.frame_rate)
+        try:
+            frames.start(renderer, backgrounds, scene.frame_rate)
+        except BaseException:
+            frames.close_videos()                # the videos started before the failure
+            raise
         loop_start = time.perf_counter()
         _render_frames(renderer, track, sensor_rng, frames, config.frames, spent, progress, overlap)
         loop_end = time.perf_counter()

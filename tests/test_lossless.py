@@ -110,3 +110,25 @@ def test_frame_rate_above_a_millisecond_is_refused(tmp_path, capsys):
     assert main(["render", str(scene), "--frames", "2", "--cameras", "1", "--format", "video",
                  "--out", str(tmp_path / "out")]) == 2
     assert "at most 1000 frames per second" in capsys.readouterr().err
+
+
+def test_an_episode_whose_third_video_fails_to_start_closes_the_two_started(tmp_path, monkeypatch):
+    """The writers were made in one list: a failure at the third left the first two ffmpeg processes open."""
+    from testbed import lossless
+    from testbed.episodes import EpisodeConfig, render_episode
+
+    real, started = lossless.VideoWriter, []
+
+    class Flaky(real):
+        def __init__(self, *args, **kwargs):
+            if len(started) == 2:
+                raise OSError("cannot start ffmpeg: no room")
+            super().__init__(*args, **kwargs)
+            started.append(self._proc)
+
+    monkeypatch.setattr(lossless, "VideoWriter", Flaky)
+    config = EpisodeConfig("lab", 1, (1, 2, 3), 1, 0, fmt="video")
+    with pytest.raises(OSError, match="no room"):
+        render_episode(config, 0, str(tmp_path))
+    assert len(started) == 2 and all(proc.poll() is not None for proc in started)    # ffmpeg ended
+    assert list(tmp_path.iterdir()) == []
