@@ -93,6 +93,19 @@ def load_calibration(path: str | os.PathLike, number: int | None = None, name: s
         raise ValueError(f"{name}: {path.name}: {exc}") from None
 
 
+def check_camera(camera: Camera, name: str) -> None:
+    """Raise a one-line ValueError starting with ``name`` (the option, or the file, that gave
+    ``camera``) unless its lens maps rays one to one onto its image and it can be rectified
+    to a level camera (:func:`pipeline.rectify.check_rectifiable`): a lens that folds over
+    would be remapped into scanlines and bearings of rays it renders twice."""
+    from .rectify import check_rectifiable
+
+    try:
+        check_rectifiable([camera])
+    except ValueError as exc:
+        raise ValueError(f"{name}: {exc}") from None
+
+
 def number_in_name(path: str | os.PathLike, default: int | None = None) -> int | None:
     """The camera number ``NN`` of a ``camNN`` file name, else ``default``."""
     m = re.search(r"cam(\d+)", Path(path).stem)
@@ -143,6 +156,8 @@ class RenderDir:
             raise ValueError(f"{name}: {self.root} is not a render directory: it has no calibration/camNN.yaml files")
         # numbered as the files (and so the frames/camNN folders) are named
         self.cameras = tuple(load_calibration(p, number_in_name(p)) for p in calib)
+        for cam, path in zip(self.cameras, calib):      # as `camtask render` checks its scene's
+            check_camera(cam, f"{name}: {path.relative_to(self.root)}")
         self.names = tuple(c.name for c in self.cameras)
         uncalibrated = sorted(p for p in (self.root / "frames").glob("cam*")
                               if p.stem not in self.names and (p.is_dir() or p.suffix == ".mkv"))

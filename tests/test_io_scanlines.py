@@ -112,3 +112,35 @@ def test_a_bad_calibration_file_names_the_option(tmp_path, capsys):
                          "--background", "1"]) == 2
         err = capsys.readouterr().err
         assert err.startswith(f"camtask scanlines: error: --calibration: {why}"), err
+
+
+def folding_copy(render_dir, root):
+    """A copy of ``render_dir`` in ``root`` whose cam01 has k1 = -0.5: on its 160 x 120 image
+    the lens folds over (pipeline.rectify.check_lens), yet every column still spans its height."""
+    import dataclasses
+
+    from pipeline.io import load_calibration
+    from testbed.dataset import write_calibration
+
+    copy = root / "render"
+    shutil.copytree(render_dir, copy)
+    path = copy / "calibration" / "cam01.yaml"
+    cam = load_calibration(path)
+    write_calibration(path, dataclasses.replace(cam, dist=np.array([-0.5, 0.0, 0.0, 0.0, 0.0])))
+    return copy
+
+
+def test_a_lens_that_folds_over_is_refused_before_any_frame(render_dir, tmp_path):
+    """`camtask render` and `run` refuse such a lens; `scanlines` remapped with it and wrote
+    scanlines and bearings of rays the lens renders twice, without a word."""
+    bad = folding_copy(render_dir, tmp_path)
+    out = tmp_path / "s.npz"
+    with pytest.raises(ValueError, match=r"^DIR: .*cam01\.yaml: camera 1: its lens distortion \[-0\.5, .*folds over"):
+        camtask(["scanlines", str(bad), "--out", str(out)])
+    with pytest.raises(ValueError, match=r"^--calibration: .*cam01\.yaml: camera 1: its lens distortion .*folds over"):
+        camtask(["scanlines", "--video", str(bad / "frames" / "cam01"), "--calibration",
+                 str(bad / "calibration" / "cam01.yaml"), "--background", "1", "--out", str(out)])
+    with pytest.raises(ValueError, match=r"^DIR: .*cam01\.yaml: camera 1: its lens distortion .*folds over"):
+        camtask(["tune", str(bad), "--trials", "1", "--out", str(tmp_path / "p.yaml")])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["render"]
+

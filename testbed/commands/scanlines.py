@@ -150,13 +150,14 @@ def default_output(root: Path, name: str) -> Path:
 
 def _run_video(args, params) -> int:
     from pipeline.core import Pipeline
-    from pipeline.io import iter_video_frames, load_calibration, save_npz_atomic
+    from pipeline.io import check_camera, iter_video_frames, load_calibration, save_npz_atomic
     from pipeline.runs import run_sequence
     from testbed.output import check_output_file
 
     if args.background < 1:
         raise ValueError(f"--background: expected an integer >= 1, got {args.background}")
     cam = load_calibration(args.calibration, name="--calibration")
+    check_camera(cam, f"--calibration: {Path(args.calibration).name}")
     source = Path(args.video).resolve()             # "." has a name once resolved
     out = Path(args.out) if args.out is not None else \
         check_output_file("--out", source.with_name(f"{source.stem}_scanlines.npz"))
