@@ -144,3 +144,25 @@ def test_a_lens_that_folds_over_is_refused_before_any_frame(render_dir, tmp_path
         camtask(["tune", str(bad), "--trials", "1", "--out", str(tmp_path / "p.yaml")])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["render"]
 
+
+def test_a_column_threshold_above_every_column_is_refused(render_dir, tmp_path):
+    """Every scanline would be empty: `render` and `run` refuse it; `scanlines --video` wrote
+    them, with no metric to show that nothing could ever be sent."""
+    from pipeline.rectify import level_cameras
+
+    rows = level_cameras(small_cameras_of(render_dir))[1]
+    params = tmp_path / "p.yaml"
+    params.write_text(f"column_threshold: {rows + 1}\n")
+    out = tmp_path / "s.npz"
+    message = rf"^--params: column_threshold {rows + 1} exceeds the {rows} pixels of a rectified column"
+    with pytest.raises(ValueError, match=message):
+        camtask(video_args(render_dir, 1, "--params", str(params), "--out", str(out)))
+    with pytest.raises(ValueError, match=message):
+        camtask(["scanlines", str(render_dir), "--params", str(params), "--out", str(out)])
+    assert not out.exists()
+
+
+def small_cameras_of(render_dir):
+    from pipeline.io import RenderDir
+
+    return RenderDir(render_dir).cameras
