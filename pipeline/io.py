@@ -158,6 +158,10 @@ class RenderDir:
         self.cameras = tuple(load_calibration(p, number_in_name(p)) for p in calib)
         for cam, path in zip(self.cameras, calib):      # as `camtask render` checks its scene's
             check_camera(cam, f"{name}: {path.relative_to(self.root)}")
+            if (cam.width, cam.height) != (self.cameras[0].width, self.cameras[0].height):
+                raise ValueError(f"{name}: {path.relative_to(self.root)} is {cam.width}x{cam.height} pixels, "
+                                 f"{calib[0].relative_to(self.root)} {self.cameras[0].width}x{self.cameras[0].height}; "
+                                 "the node pipeline takes cameras of one resolution")
         self.names = tuple(c.name for c in self.cameras)
         uncalibrated = sorted(p for p in (self.root / "frames").glob("cam*")
                               if p.stem not in self.names and (p.is_dir() or p.suffix == ".mkv"))

@@ -166,3 +166,25 @@ def small_cameras_of(render_dir):
     from pipeline.io import RenderDir
 
     return RenderDir(render_dir).cameras
+
+
+def test_cameras_of_two_resolutions_are_named_by_their_files(render_dir, tmp_path):
+    """It said 'cameras: expected every camera to have the same resolution', naming neither DIR nor a file."""
+    import dataclasses
+
+    from pipeline.io import load_calibration
+    from testbed.dataset import write_calibration
+
+    copy = tmp_path / "render"
+    shutil.copytree(render_dir, copy)
+    names = sorted(p.name for p in (copy / "calibration").glob("cam*.yaml"))
+    path = copy / "calibration" / names[-1]
+    cam = load_calibration(path)
+    K = cam.K.copy()
+    K[:2] *= 2
+    write_calibration(path, dataclasses.replace(cam, K=K, width=2 * cam.width, height=2 * cam.height))
+    with pytest.raises(ValueError) as err:
+        camtask(["scanlines", str(copy), "--out", str(tmp_path / "s.npz")])
+    assert str(err.value) == (f"DIR: calibration/{names[-1]} is {2 * cam.width}x{2 * cam.height} pixels, "
+                              f"calibration/{names[0]} {cam.width}x{cam.height}; the node pipeline takes "
+                              "cameras of one resolution")
