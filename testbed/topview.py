@@ -68,8 +68,9 @@ class TopView:
                 cv2.line(img, tuple(self.px(c)), tuple(self.px(c + reach * np.array([np.cos(a), np.sin(a)]))),
                          CAMERA_OFF, 1, cv2.LINE_AA)
         img[self.inside == 0] = BACKGROUND              # cones and edges end at the walls
-        for p in result.polygons:
-            cv2.fillPoly(img, [self.px(np.asarray(p.exterior.coords))], HULL)
+        for p in result.polygons:                        # holes too: free space carved inside a polygon
+            rings = [p.exterior, *p.interiors]
+            cv2.fillPoly(img, [self.px(np.asarray(r.coords)) for r in rings], HULL)
         cv2.polylines(img, [self.px(self.scene.room.vertices)], True, WALL, 2, cv2.LINE_AA)
         r = max(2, int(self.scene.people.radius * self.scale))
         for p in result.truth:

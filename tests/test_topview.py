@@ -46,3 +46,22 @@ def test_two_video_writers_to_one_path_do_not_share_a_temporary_file(tmp_path):
     frames = [np.frombuffer(f, np.uint8) for f in reader]
     assert len(frames) == 3 and all(f.mean() > 200 for f in frames)   # b's white frames, not a's
     assert sorted(p.name for p in tmp_path.iterdir()) == ["v.mp4"]
+
+
+def test_hull_hole_is_not_painted():
+    """A hull polygon with a hole (free space carved inside it, as when the cameras' sight
+    radius ends before the far wall) leaves the hole unpainted: its exterior alone used to
+    paint the whole room as hull."""
+    from shapely.geometry import box
+
+    from testbed.topview import HULL
+
+    scene = load_scene("lab")
+    ring = box(0.5, 0.5, 6.0, 5.0).difference(box(2.0, 2.0, 4.0, 4.0))
+    frame = _frame(1, np.zeros(640, bool))
+    frame.polygons.append(ring)
+    view = TopView(scene, width=400)
+    img = view.draw(frame, {n: np.linspace(1.0, 0.2, 640) for n in range(1, 17)}, title=" ")
+    (u_hole, v_hole), (u_hull, v_hull) = view.px([[3.0, 3.0], [1.0, 1.0]])
+    assert tuple(img[v_hull, u_hull]) == HULL
+    assert tuple(img[v_hole, u_hole]) != HULL
