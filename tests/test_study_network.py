@@ -118,3 +118,26 @@ def test_tracking_figure_titles_say_dash_not_nan_without_a_matched_position(monk
             "speed": 0.3, "feedback": "hull"}
     tracking.plot({"meta": {"arguments": opts, "seed": 0}, "figure_trial": 0}, "unused.png")
     assert titles == ["uniform k=6: this track's MSE -\n(all objects -)"]
+
+
+SMALL_ROOM = """\
+name: small room
+room: {shape: circle, radius: 3.0, height: 3.0}
+cameras:
+  intrinsics: {resolution: [256, 192], hfov_deg: 90, distortion: [0, 0, 0, 0, 0]}
+  poses:
+    - {number: 2, position: [-2.8, 0.0, 2.5], yaw_deg: 0, pitch_deg: 30}
+    - {number: 1, position: [2.8, 0.0, 2.5], yaw_deg: 180, pitch_deg: 30}
+people: {count: 1, radius: 0.3}
+"""
+
+
+@pytest.mark.render
+def test_lab_study_names_the_scene_by_its_name(capsys, tmp_path):
+    """A scene file's ``name`` is the study's ``scene``, as `run` and `render` report it (it
+    was the file's name)."""
+    path = tmp_path / "my_room.yaml"
+    path.write_text(SMALL_ROOM)
+    doc = run_json(capsys, "lab", "--scene", str(path), "--people", "1", "--k", "1", "--taskers", "uniform",
+                   "--frames", "1", "--trials", "1", "--workers", "0")
+    assert doc["scene"] == "small room" and doc["cameras"] == 2

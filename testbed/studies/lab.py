@@ -1,16 +1,14 @@
 """Study ``lab``: taskers on the rendered lab (the paper's figure 13).
 
-Each trial draws a walk of ``--people`` people in the lab, renders all 16 cameras every
-frame and turns every frame into a scanline with the node pipeline (nodes process all
-the time; only tasked nodes *send*). Every tasker and k then runs the closed loop on
+Each trial draws a walk of ``--people`` people in the lab (or ``--scene``), renders all
+its cameras (16 in the lab) every frame and turns every frame into a scanline with the
+node pipeline (nodes process all the time; only tasked nodes *send*). Every tasker and k then runs the closed loop on
 exactly these scanlines. The residual is the paper's: the time-averaged hull area
 (after removing polygons smaller than one person) divided by the minimum hull area
-reached with all 16 cameras over the run.
+reached with all the cameras over the run. The result's ``scene`` is the scene's ``name``.
 """
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 
@@ -74,7 +72,7 @@ def render_scanlines(scene, params, truth: np.ndarray, rng) -> tuple:
 
 
 def run_trial(trial: int, opts: dict, seed: int) -> dict:
-    """One walk: mean hull area per (tasker, k) and the minimum 16-camera hull area."""
+    """One walk: mean hull area per (tasker, k) and the minimum all-camera hull area."""
     from pipeline import load_params
     from scene import load_scene
     from testbed.episode import walk, with_people
@@ -98,6 +96,8 @@ def run_trial(trial: int, opts: dict, seed: int) -> dict:
 
 
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
+    from scene import load_scene
+
     per_trial = runner(run_trial, [(t, opts, seed) for t in range(trials)], [1] * trials, "lab")
     empty = [i for i, t in enumerate(per_trial) if t["min_full"] <= 0]
     if empty:                                   # the residual's denominator
@@ -111,7 +111,7 @@ def run(opts: dict, trials: int, seed: int, runner) -> dict:
             records.append({"tasker": tasker, "k": k, "residual": mean, "residual_sem": sem, "trials": trials})
     full = float(np.mean([t["mean_full"] / t["min_full"] for t in per_trial]))
     return {"records": records, "all_cameras_residual": full, "cameras": per_trial[0]["cameras"],
-            "scene": Path(opts["scene"]).stem}
+            "scene": load_scene(opts["scene"]).name}
 
 
 def format_table(result: dict) -> str:
