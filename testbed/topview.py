@@ -21,14 +21,20 @@ CAMERA_OFF = (150, 150, 150)
 
 
 class TopView:
-    """Maps floor coordinates (metres) to pixels of a ``size``-pixel-wide canvas."""
+    """Maps floor coordinates (metres) to pixels of a ``width``-pixel-wide canvas.
+
+    The room fills the width less the margins; a room deeper than it is wide fills the
+    height of a square canvas instead, centred across (a 1 x 100 m corridor drawn 720
+    pixels wide was 66254 pixels tall, more than a video encoder takes).
+    """
 
     def __init__(self, scene: Scene, width: int = 640, margin: int = 30):
         self.scene = scene
         lo = scene.room.vertices.min(axis=0)
         hi = scene.room.vertices.max(axis=0)
-        self.scale = (width - 2 * margin) / (hi[0] - lo[0])
+        self.scale = (width - 2 * margin) / float(np.max(hi - lo))
         self.lo, self.margin = lo, margin
+        self.left = (width - (hi[0] - lo[0]) * self.scale) / 2      # pixels left of the room: the margin, or more
         self.width = width
         self.height = round((hi[1] - lo[1]) * self.scale + 2 * margin)
         self.tails: dict[int, list] = {}
@@ -38,7 +44,7 @@ class TopView:
     def px(self, xy) -> np.ndarray:
         """Floor points (..., 2) metres -> pixel points (..., 2) int32 (u right, v down; y up)."""
         xy = np.asarray(xy, float)
-        u = self.margin + (xy[..., 0] - self.lo[0]) * self.scale
+        u = self.left + (xy[..., 0] - self.lo[0]) * self.scale
         v = self.height - self.margin - (xy[..., 1] - self.lo[1]) * self.scale
         return np.stack([u, v], axis=-1).round().astype(np.int32)
 

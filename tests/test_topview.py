@@ -1,6 +1,7 @@
 """The top view draws each tasked camera's occluded cone where its scanline says."""
 
 import numpy as np
+import pytest
 
 from scene import load_scene
 from testbed.loop import FrameResult
@@ -65,3 +66,28 @@ def test_hull_hole_is_not_painted():
     (u_hole, v_hole), (u_hull, v_hull) = view.px([[3.0, 3.0], [1.0, 1.0]])
     assert tuple(img[v_hull, u_hull]) == HULL
     assert tuple(img[v_hole, u_hole]) != HULL
+
+
+CORRIDOR = """\
+room: {shape: rectangle, width: 1.0, depth: 100.0, height: 3.0}
+cameras:
+  intrinsics: {resolution: [320, 240], hfov_deg: 60, distortion: [0, 0, 0, 0, 0]}
+  poses:
+    - {number: 1, position: [0.5, 0.1, 2.5], yaw_deg: 90, pitch_deg: 10}
+people: {count: 1, radius: 0.25}
+"""
+
+
+@pytest.mark.parametrize("text", [CORRIDOR, CORRIDOR.replace("width: 1.0, depth: 100.0", "width: 3.0, depth: 4.0")])
+def test_room_deeper_than_wide_fits_a_square(text):
+    """A room deeper than it is wide is drawn within a square canvas, centred: a 1 x 100 m
+    corridor made a 720 x 66254-pixel top view, which `run --video` could not encode after
+    the whole run."""
+    from scene import Scene
+
+    scene = Scene.from_text(text, "corridor.yaml")
+    view = TopView(scene, width=720)
+    assert view.height <= view.width
+    u, v = view.px(scene.room.vertices).T
+    assert v.min() == view.margin and v.max() == view.height - view.margin   # the depth fills the height
+    assert u.min() + u.max() == pytest.approx(view.width, abs=1)             # centred across
