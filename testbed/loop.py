@@ -197,6 +197,31 @@ def tracker_params(scene: Scene) -> TrackerParams:
     return TrackerParams(dt=scene.dt, gate=3 * r, meas_std=0.5 * r, accel_std=2.0 * scene.people.speed)
 
 
+def scanline_views(bearings) -> tuple[np.ndarray, np.ndarray]:
+    """Each camera's floor-plane view as its scanline sees it, for tasking: yaw (n,) radians,
+    the direction halfway between the outer edges of its first and last columns, and fov
+    (n,) radians, the angle between those edges.
+
+    bearings : n sequences of (W,) float, radians, each camera's column bearings, left to
+        right (decreasing). Not the optical axis and the pinhole's field of view: an
+        off-centre principal point turns the view from the axis, a barrel lens widens it,
+        and the pitch and the rectification narrow it (lab: 49.16 degrees, 0.21 off the
+        axis).
+
+    >>> yaw, fov = scanline_views([np.radians([10.0, 0.0, -10.0])])
+    >>> np.degrees(yaw).round(6).tolist(), np.degrees(fov).round(6).tolist()
+    ([0.0], [30.0])
+    """
+    yaw, fov = [], []
+    for b in bearings:
+        b = np.unwrap(np.asarray(b, float))
+        left = b[0] + (b[0] - b[1]) / 2                     # columns are pixel centres: half one out
+        right = b[-1] - (b[-2] - b[-1]) / 2
+        yaw.append(float(np.angle(np.exp(0.5j * (left + right)))))
+        fov.append(float(left - right))
+    return np.array(yaw), np.array(fov)
+
+
 def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_frame=None,
              progress: bool = False, seconds: dict | None = None):
     """Run the tasked network over ``truth`` (frames, people, 2) metres; yield :class:`FrameResult`.
@@ -210,7 +235,8 @@ def run_loop(scene: Scene, config: LoopConfig, truth: np.ndarray, source, *, on_
     from tqdm import tqdm
 
     config.check(len(scene.cameras))
-    xy, yaw, fov = scene.floor_poses()
+    xy, _, _ = scene.floor_poses()
+    yaw, fov = scanline_views([source.bearings[i + 1] for i in range(len(scene.cameras))])
     radius = scene.people.radius
     object_area = np.pi * radius**2
     occupied = max(len(truth[0]) if len(truth) else 0, 1) * object_area

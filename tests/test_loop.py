@@ -370,3 +370,41 @@ def test_demo_refuses_a_folder_in_the_place_of_one_of_its_files_before_any_work(
     err = capsys.readouterr().err.strip()
     assert err == f"camtask demo: error: --out: {tmp_path / name} is a folder; expected a file name"
     assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+OFF_CENTRE = """\
+room: {shape: rectangle, width: 5.0, depth: 4.0, height: 3.0}
+cameras:
+  intrinsics: {resolution: [320, 240], hfov_deg: 60, principal: [40.0, 120.0], distortion: [-0.15, 0.02, 0, 0, 0]}
+  poses:
+    - {number: 1, position: [0.1, 0.1, 2.5], yaw_deg: 60, pitch_deg: 20}
+    - {number: 2, position: [4.9, 3.9, 2.5], yaw_deg: -120, pitch_deg: 20}
+    - {number: 3, position: [4.9, 0.1, 2.5], yaw_deg: 150, pitch_deg: 20}
+people: {count: 2, radius: 0.25}
+"""
+
+
+def test_the_tasker_models_each_camera_by_the_view_of_its_scanline(monkeypatch):
+    """Tasking predicts what a camera sees from its floor-plane view: that of its
+    scanline's columns. The optical axis and the pinhole's field of view (53.6 degrees) put
+    the view of a camera whose principal point is 40 px from its image's left edge 20.4
+    degrees off, and 3.3 degrees narrower than its barrel lens's."""
+    import testbed.loop
+    from pipeline.rectify import Rectifier
+    from scene import Scene
+
+    scene = Scene.from_text(OFF_CENTRE, "off_centre.yaml")
+    truth = walk(scene, 3, np.random.default_rng(2))
+    bearings = Rectifier.build(scene.cameras).bearings
+    source = PrecomputedSource(_disc_scanlines(scene, truth, bearings), bearings)
+    given = []
+    real = testbed.loop.choose_cameras
+    monkeypatch.setattr(testbed.loop, "choose_cameras",
+                        lambda *a, **kw: given.append((np.array(a[3]), np.array(a[4]))) or real(*a, **kw))
+    list(run_loop(scene, LoopConfig("greedy", 1), truth, source))
+    yaw, fov = given[-1]
+    step = np.abs(np.diff(bearings, axis=1)).max()          # one column
+    for i, b in enumerate(bearings):
+        off = np.angle(np.exp(1j * (b - yaw[i])))            # each column's bearing from the view's centre
+        assert np.all(np.abs(off) <= fov[i] / 2)             # the view holds every column
+        assert off.max() > fov[i] / 2 - step and off.min() < -fov[i] / 2 + step   # and no more
