@@ -20,7 +20,7 @@ def test_frames_beyond_any_memory_are_refused_naming_the_flag(command, tmp_path,
 
 def test_the_bound_follows_the_memory_available_cameras_and_people(monkeypatch, capsys):
     monkeypatch.setattr(memory, "available_memory", lambda: 2_000_000_000)
-    per_frame = run_command.FRAME_BYTES + 6 * run_command.CAMERA_BYTES + 3 * run_command.PERSON_BYTES
+    per_frame = run_command.FRAME_BYTES + 6 * (run_command.CAMERA_BYTES + 640) + 3 * run_command.PERSON_BYTES
     most = 2_000_000_000 // per_frame
     run_command.check_frames_fit(most, 6, 3)
     with pytest.raises(ValueError, match=f"^--frames: {most + 1} frames would hold about 2 GB .* "
@@ -43,3 +43,31 @@ def test_study_lab_refuses_a_trial_longer_than_the_memory(monkeypatch, capsys):
     assert err == (f"camtask study: error: --frames: 100000000 frames would hold about 2,053 GB of memory in each "
                    f"trial (every camera's scanlines of every frame), more than the 2 GB available; expected at "
                    f"most {2_000_000_000 // per_frame} frames here\n")
+
+
+WIDE = """\
+room: {shape: rectangle, width: 6.0, depth: 5.0, height: 3.0}
+cameras:
+  intrinsics: {resolution: [6400, 4800], hfov_deg: 60, distortion: [0, 0, 0, 0, 0]}
+  poses:
+    - {number: 1, position: [0.1, 0.1, 2.5], yaw_deg: 40, pitch_deg: 20}
+people: {count: 3, radius: 0.25}
+"""
+
+
+def test_the_bound_counts_each_scanline_column(monkeypatch, capsys, tmp_path):
+    """A frame's results hold each tasked camera's scanline, one byte a column: a scene of
+    6400-pixel-wide cameras was given the bound of the lab's 640."""
+    import testbed.episode
+
+    def walked(*args, **kwargs):
+        raise AssertionError("the walk was drawn: the bound let the run start")
+
+    monkeypatch.setattr(testbed.episode, "walk", walked)
+    monkeypatch.setattr(memory, "available_memory", lambda: 2_000_000_000)
+    per_frame = run_command.FRAME_BYTES + (run_command.CAMERA_BYTES + 6400) + 3 * run_command.PERSON_BYTES
+    most = 2_000_000_000 // per_frame
+    scene = tmp_path / "wide.yaml"
+    scene.write_text(WIDE)
+    assert cli.main(["run", str(scene), "--k", "1", "--frames", str(most + 1)]) == 2
+    assert f"expected at most {most} frames here" in capsys.readouterr().err

@@ -42,21 +42,22 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
 
 #: Memory a run holds until its end, for the summary and ``--json``: each frame's results
 #: (scanlines, hull polygons, positions, tracks, their JSON), a fixed part and a part per
-#: tasked camera and per person, over the walk's 16 bytes per person. Measured 11-17 kB a
-#: frame with 3 people and 15-40 kB with 20 (6 and 16 cameras tasked); these err above.
-FRAME_BYTES, CAMERA_BYTES, PERSON_BYTES = 8000, 1000, 1000 + 16
+#: tasked camera (and its scanline's byte per column) and per person, over the walk's 16
+#: bytes per person. Measured 11-17 kB a frame with 3 people and 15-40 kB with 20 (6 and 16
+#: of the lab's 640-column cameras tasked); these err above.
+FRAME_BYTES, CAMERA_BYTES, PERSON_BYTES = 8000, 360, 1000 + 16
 #: Seconds before the walk's progress bar shows (a short walk shows none).
 WALK_BAR_DELAY = 1.0
 
 
-def check_frames_fit(frames: int, k: int, people: int, option: str = "--frames") -> None:
+def check_frames_fit(frames: int, k: int, people: int, option: str = "--frames", columns: int = 640) -> None:
     """Raise a one-line ValueError naming ``option`` when ``frames`` frames of ``k`` tasked
-    cameras and ``people`` people would hold more memory than is available now (before the
-    walk: --frames 10**8 walked for hours, then filled the memory frame by frame). The
-    renderer's ~1 GB, whatever ``frames``, is not counted."""
+    cameras of ``columns``-pixel-wide scanlines and ``people`` people would hold more memory
+    than is available now (before the walk: --frames 10**8 walked for hours, then filled the
+    memory frame by frame). The renderer's ~1 GB, whatever ``frames``, is not counted."""
     from testbed.memory import check_fits
 
-    check_fits(option, frames, "frames", FRAME_BYTES + CAMERA_BYTES * k + PERSON_BYTES * people,
+    check_fits(option, frames, "frames", FRAME_BYTES + (CAMERA_BYTES + columns) * k + PERSON_BYTES * people,
                "until the run ends (the walk and each frame's results, for the summary)")
 
 
@@ -87,7 +88,7 @@ def prepare(args):
         len(scene.cameras), as_options=True)
     params = load_params(args.params, "--params")
     check_column_threshold(params.column_threshold, scene.cameras, "--params")
-    check_frames_fit(args.frames, config.k, scene.people.count)
+    check_frames_fit(args.frames, config.k, scene.people.count, columns=scene.cameras[0].width)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
     # the walk is drawn before the first frame: ~0.2 ms a frame for 3 people, ~4 ms for 49,
     # so minutes for a million frames; its own bar shows after a second, then goes
