@@ -341,3 +341,11 @@ def test_m_is_refused_where_no_tasker_is_incremental(capsys):
     assert one_line_error(capsys, "moving", "--k", "2,4", "--m", "3", "--trials", "1") == (
         "--m: expected at most the smallest incremental k = 2, got 3")
     assert one_line_error(capsys, "moving", "--m", "0", "--trials", "1") == "--m: expected an integer >= 1, got 0"
+
+
+def test_the_lab_tables_reference_line_names_one_camera_as_one():
+    """A one-camera scene's table ended 'all 1 cameras: ...'."""
+    records = [{"tasker": "greedy", "k": 1, "residual": 1.0, "std": 0.0}]
+    for n, line in ((1, "the one camera: 1.000"), (16, "all 16 cameras: 1.000")):
+        table = lab.format_table({"records": records, "cameras": n, "scene": "s", "all_cameras_residual": 1.0})
+        assert table.splitlines()[-1] == line

@@ -114,15 +114,20 @@ def run(opts: dict, trials: int, seed: int, runner) -> dict:
             "scene": load_scene(opts["scene"]).name}
 
 
+def every_camera(n: int) -> str:
+    """``all 16 cameras``, or ``the one camera`` of a one-camera scene."""
+    return "the one camera" if n == 1 else f"all {n} cameras"
+
+
 def format_table(result: dict) -> str:
     n = result["cameras"]
     title = f"Normalised residual hull area on {result['scene']} (hull area / min {n}-camera area):"
     return (core.tasker_table(result["records"], title, digits=3)
-            + f"\nall {n} cameras: {result['all_cameras_residual']:.3f}")
+            + f"\n{every_camera(n)}: {result['all_cameras_residual']:.3f}")
 
 
 def plot(result: dict, path: str) -> None:
     n = result["cameras"]
     core.plot_taskers(result["records"], path, f"Fig. 13: taskers on the rendered {result['scene']}",
                       f"hull area / min {n}-camera area",
-                      reference=(result["all_cameras_residual"], f"all {n} cameras"))
+                      reference=(result["all_cameras_residual"], every_camera(n)))
