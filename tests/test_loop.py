@@ -408,3 +408,32 @@ def test_the_tasker_models_each_camera_by_the_view_of_its_scanline(monkeypatch):
         off = np.angle(np.exp(1j * (b - yaw[i])))            # each column's bearing from the view's centre
         assert np.all(np.abs(off) <= fov[i] / 2)             # the view holds every column
         assert off.max() > fov[i] / 2 - step and off.min() < -fov[i] / 2 + step   # and no more
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--tasker", "greedy", "--m", "3"],
+     "--m: the cameras incremental greedy swaps per update; --tasker greedy swaps none (got --m 3)"),
+    (["--tasker", "uniform", "--k", "6", "--m", "7"],
+     "--m: the cameras incremental greedy swaps per update; --tasker uniform swaps none (got --m 7)"),
+    (["--tasker", "uniform", "--update-every", "5"],
+     "--update-every: the re-tasking period of every tasker but uniform; --tasker uniform never re-tasks"),
+])
+def test_run_refuses_a_loop_option_its_tasker_does_not_use(capsys, monkeypatch, argv, message):
+    """--m with greedy and --update-every with uniform were silently unused, yet the summary
+    (and --json) recorded them as the run's swaps and period; the studies refuse them."""
+    import testbed.episode
+
+    monkeypatch.setattr(testbed.episode, "walk", lambda *a, **kw: pytest.fail("the walk was drawn"))
+    assert main(["run", "lab", "--frames", "1", *argv]) == 2
+    assert capsys.readouterr().err.strip() == f"camtask run: error: {message}"
+
+
+@pytest.mark.render
+def test_run_records_null_for_the_loop_options_its_tasker_does_not_use(capsys):
+    for tasker, m, update_every in (("uniform", None, None), ("greedy", None, 1), ("incremental", 1, 1)):
+        assert main(["run", "lab", "--tasker", tasker, "--k", "1", "--frames", "1", "--json"]) == 0
+        summary = json.loads(capsys.readouterr().out)["summary"]
+        assert (summary["m"], summary["update_every"]) == (m, update_every), tasker
+    from testbed.commands.run import format_summary
+
+    assert "tasker uniform k=1\n" in format_summary(summary | {"tasker": "uniform", "m": None, "update_every": None})

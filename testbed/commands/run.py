@@ -27,8 +27,10 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("scene", metavar="SCENE.yaml", help="scene file or built-in name (lab)")
     p.add_argument("--tasker", default="incremental", help=f"one of {', '.join(TASKERS)} (default incremental)")
     p.add_argument("--k", type=int, default=6, help="cameras tasked per frame (default 6)")
-    p.add_argument("--m", type=int, default=1, help="cameras swapped per incremental update (default 1)")
-    p.add_argument("--update-every", type=int, default=1, metavar="U", help="re-task every U frames (default 1)")
+    p.add_argument("--m", type=int, default=None,
+                   help="cameras swapped per incremental update (default 1; incremental alone)")
+    p.add_argument("--update-every", type=int, default=None, metavar="U",
+                   help="re-task every U frames (default 1; not with uniform, which never re-tasks)")
     p.add_argument("--feedback", default="hull", choices=("hull", "tracks"),
                    help="object estimates for tasking: previous hull centres (paper; default) or confirmed tracks")
     p.add_argument("--no-near-field", dest="near_field", action="store_false",
@@ -61,6 +63,22 @@ def check_frames_fit(frames: int, k: int, people: int, option: str = "--frames",
                "until the run ends (the walk and each frame's results, for the summary)")
 
 
+def loop_options(args) -> tuple[int, int]:
+    """``--m`` and ``--update-every``, 1 when not given; a one-line ValueError when one is
+    given to a tasker that does not use it (``--m`` is incremental greedy's alone, uniform
+    never re-tasks), as the studies refuse them: it was recorded as the run's own."""
+    from tasking import TASKERS, check_choice
+
+    check_choice("--tasker", args.tasker, TASKERS)
+    if args.m is not None and args.tasker != "incremental":
+        raise ValueError(f"--m: the cameras incremental greedy swaps per update; --tasker {args.tasker} swaps none "
+                         f"(got --m {args.m})")
+    if args.update_every is not None and args.tasker == "uniform":
+        raise ValueError("--update-every: the re-tasking period of every tasker but uniform; --tasker uniform "
+                         "never re-tasks")
+    return (1 if args.m is None else args.m), (1 if args.update_every is None else args.update_every)
+
+
 def prepare(args):
     """Validate the arguments and draw the walk: (scene, config, params, truth, sensor rng)."""
     from tqdm import tqdm
@@ -84,7 +102,7 @@ def prepare(args):
         option = "--people" if args.people is not None else f"people.count of {args.scene}"
         raise ValueError(f"{option}: expected at least 1 person to track, got 0")
     check_people_renderable(scene, "--people" if args.people is not None else f"people.count of {args.scene}")
-    config = LoopConfig(args.tasker, args.k, args.m, args.update_every, args.feedback, args.near_field).check(
+    config = LoopConfig(args.tasker, args.k, *loop_options(args), args.feedback, args.near_field).check(
         len(scene.cameras), as_options=True)
     params = load_params(args.params, "--params")
     check_column_threshold(params.column_threshold, scene.cameras, "--params")
@@ -144,7 +162,9 @@ def execute(scene, config, params, truth, sensor_rng, video=None):
             if writer:
                 writer.close(ok=ok)
     summary = summarise(results, scene)
-    summary.update(tasker=config.tasker, k=config.k, m=config.m, update_every=config.update_every,
+    summary.update(tasker=config.tasker, k=config.k,        # null where the tasker has no use for them
+                   m=config.m if config.tasker == "incremental" else None,
+                   update_every=None if config.tasker == "uniform" else config.update_every,
                    feedback=config.feedback, near_field=config.near_field, people=scene.people.count,
                    scene=scene.name)
     return results, summary, source.bearings
@@ -166,7 +186,8 @@ def format_summary(s: dict) -> str:
     t = s.get("tracking", {})
     lines = [
         (f"{s['scene']}: {s['people']} people, {s['frames']} frames, tasker {s['tasker']} "
-         f"k={s['k']} m={s['m']} update every {s['update_every']}"),
+         f"k={s['k']}" + ("" if s["m"] is None else f" m={s['m']}")
+         + ("" if s["update_every"] is None else f" update every {s['update_every']}")),
         f"  mean hull area      {s['hull_area']:.3f} m^2",
         f"  mean residual       {s['residual']:.3f}  (hull area / occupied area - 1)",
         f"  bits per frame      {s['bits_per_frame']:.0f}  (run-length coded scanlines)",
