@@ -437,3 +437,21 @@ def test_run_records_null_for_the_loop_options_its_tasker_does_not_use(capsys):
     from testbed.commands.run import format_summary
 
     assert "tasker uniform k=1\n" in format_summary(summary | {"tasker": "uniform", "m": None, "update_every": None})
+
+
+def test_run_refuses_feedback_with_uniform_which_never_re_tasks(capsys, monkeypatch):
+    """--tasker uniform --feedback tracks ran uniform, which tasks from no estimates, and the
+    summary recorded feedback: tracks."""
+    import testbed.episode
+
+    monkeypatch.setattr(testbed.episode, "walk", lambda *a, **kw: pytest.fail("the walk was drawn"))
+    assert main(["run", "lab", "--frames", "1", "--tasker", "uniform", "--feedback", "tracks"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "camtask run: error: --feedback: the estimates the tasker re-tasks from; --tasker uniform never re-tasks")
+
+
+@pytest.mark.render
+def test_run_records_null_feedback_for_uniform(capsys):
+    for tasker, feedback in (("uniform", None), ("greedy", "hull")):
+        assert main(["run", "lab", "--tasker", tasker, "--k", "1", "--frames", "1", "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["summary"]["feedback"] == feedback, tasker

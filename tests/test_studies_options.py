@@ -349,3 +349,13 @@ def test_the_lab_tables_reference_line_names_one_camera_as_one():
     for n, line in ((1, "the one camera: 1.000"), (16, "all 16 cameras: 1.000")):
         table = lab.format_table({"records": records, "cameras": n, "scene": "s", "all_cameras_residual": 1.0})
         assert table.splitlines()[-1] == line
+
+
+def test_tracking_refuses_feedback_where_every_network_is_uniform(capsys):
+    """--feedback tracks with uniform pairs alone was silently unused, and meta.arguments recorded it."""
+    assert one_line_error(capsys, "tracking", "--pairs", "uniform:4,uniform:6", "--feedback", "tracks",
+                          "--trials", "1") == (
+        "--feedback: the estimates the taskers re-task from; uniform alone never re-tasks")
+    assert tracking.parse(parsed("tracking", "--pairs", "uniform:4"))["feedback"] is None
+    assert tracking.parse(parsed("tracking", "--pairs", "uniform:4,greedy:3"))["feedback"] == "hull"
+    assert tracking.parse(parsed("tracking", "--pairs", "greedy:3", "--feedback", "tracks"))["feedback"] == "tracks"

@@ -31,8 +31,9 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
                    help="cameras swapped per incremental update (default 1; incremental alone)")
     p.add_argument("--update-every", type=int, default=None, metavar="U",
                    help="re-task every U frames (default 1; not with uniform, which never re-tasks)")
-    p.add_argument("--feedback", default="hull", choices=("hull", "tracks"),
-                   help="object estimates for tasking: previous hull centres (paper; default) or confirmed tracks")
+    p.add_argument("--feedback", default=None, choices=("hull", "tracks"),
+                   help="object estimates for tasking: previous hull centres (paper; default) or confirmed tracks "
+                        "(not with uniform, which never re-tasks)")
     p.add_argument("--no-near-field", dest="near_field", action="store_false",
                    help="carve the hull from each camera's centre, as the paper's cameras, not only beyond its "
                         "blind radius (a person close to a camera, below its image, can then fall outside it)")
@@ -63,10 +64,11 @@ def check_frames_fit(frames: int, k: int, people: int, option: str = "--frames",
                "until the run ends (the walk and each frame's results, for the summary)")
 
 
-def loop_options(args) -> tuple[int, int]:
-    """``--m`` and ``--update-every``, 1 when not given; a one-line ValueError when one is
-    given to a tasker that does not use it (``--m`` is incremental greedy's alone, uniform
-    never re-tasks), as the studies refuse them: it was recorded as the run's own."""
+def loop_options(args) -> tuple[int, int, str]:
+    """``--m``, ``--update-every`` and ``--feedback``, 1, 1 and hull when not given; a
+    one-line ValueError when one is given to a tasker that does not use it (``--m`` is
+    incremental greedy's alone, uniform never re-tasks), as the studies refuse them: it was
+    recorded as the run's own."""
     from tasking import TASKERS, check_choice
 
     check_choice("--tasker", args.tasker, TASKERS)
@@ -76,7 +78,10 @@ def loop_options(args) -> tuple[int, int]:
     if args.update_every is not None and args.tasker == "uniform":
         raise ValueError("--update-every: the re-tasking period of every tasker but uniform; --tasker uniform "
                          "never re-tasks")
-    return (1 if args.m is None else args.m), (1 if args.update_every is None else args.update_every)
+    if args.feedback is not None and args.tasker == "uniform":
+        raise ValueError("--feedback: the estimates the tasker re-tasks from; --tasker uniform never re-tasks")
+    return ((1 if args.m is None else args.m), (1 if args.update_every is None else args.update_every),
+            args.feedback or "hull")
 
 
 def prepare(args):
@@ -102,7 +107,7 @@ def prepare(args):
         option = "--people" if args.people is not None else f"people.count of {args.scene}"
         raise ValueError(f"{option}: expected at least 1 person to track, got 0")
     check_people_renderable(scene, "--people" if args.people is not None else f"people.count of {args.scene}")
-    config = LoopConfig(args.tasker, args.k, *loop_options(args), args.feedback, args.near_field).check(
+    config = LoopConfig(args.tasker, args.k, *loop_options(args), args.near_field).check(
         len(scene.cameras), as_options=True)
     params = load_params(args.params, "--params")
     check_column_threshold(params.column_threshold, scene.cameras, "--params")
@@ -165,7 +170,7 @@ def execute(scene, config, params, truth, sensor_rng, video=None):
     summary.update(tasker=config.tasker, k=config.k,        # null where the tasker has no use for them
                    m=config.m if config.tasker == "incremental" else None,
                    update_every=None if config.tasker == "uniform" else config.update_every,
-                   feedback=config.feedback, near_field=config.near_field, people=scene.people.count,
+                   feedback=None if config.tasker == "uniform" else config.feedback, near_field=config.near_field, people=scene.people.count,
                    scene=scene.name)
     return results, summary, source.bearings
 

@@ -46,8 +46,9 @@ def add_arguments(p) -> None:
     core.add_update(p, 1)
     core.add_radius(p)
     core.add_speed(p, SPEED)
-    p.add_argument("--feedback", choices=("hull", "tracks"), default="hull",
-                   help="object estimates for tasking: previous hull centres (paper; default) or confirmed tracks")
+    p.add_argument("--feedback", choices=("hull", "tracks"), default=None,
+                   help="object estimates for tasking: previous hull centres (paper; default) or confirmed tracks "
+                        "(not with uniform pairs alone, which never re-task)")
 
 
 def parse(args) -> dict:
@@ -70,9 +71,12 @@ def parse(args) -> dict:
                "in each episode (the walk, its tracks and py-motmetrics' events of every step)")
     core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED, low_open=True)
     m = core.check_m(args.m, [k for name, k in pairs if name == "incremental"])
+    feedback = None if update_every is None else args.feedback or "hull"     # uniform alone: none
+    if update_every is None and args.feedback is not None:
+        raise ValueError("--feedback: the estimates the taskers re-task from; uniform alone never re-tasks")
     return {"pairs": pairs, "objects": args.objects, "steps": args.steps,
             "update_every": update_every, "m": m, "radius": radius, "speed": args.speed,
-            "feedback": args.feedback}
+            "feedback": feedback}
 
 
 def tracker_params(radius: float, speed: float) -> TrackerParams:
