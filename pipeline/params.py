@@ -136,6 +136,19 @@ class PipelineParams:
         write_atomic(path, text.encode())
 
 
+def params_option(path: str | os.PathLike | None) -> str:
+    """How a command's error names the parameters it runs with: ``--params`` when ``path``
+    was given, else the default file it falls back on (an error about a default value said
+    ``--params`` to a user who had given none).
+
+    >>> params_option(None)
+    '--params (not given: the default assets/pipeline/default.yaml)'
+    """
+    if path is not None:
+        return "--params"
+    return f"--params (not given: the default {DEFAULT_PATH.relative_to(DEFAULT_PATH.parents[2]).as_posix()})"
+
+
 def load_params(path: str | os.PathLike | None = None, name: str = "params") -> PipelineParams:
     """Parameters from ``path``, or the defaults in ``assets/pipeline/default.yaml``; an
     error names ``name`` (the option that gave ``path``, e.g. ``--params``)."""

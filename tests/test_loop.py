@@ -455,3 +455,30 @@ def test_run_records_null_feedback_for_uniform(capsys):
     for tasker, feedback in (("uniform", None), ("greedy", "hull")):
         assert main(["run", "lab", "--tasker", tasker, "--k", "1", "--frames", "1", "--json"]) == 0
         assert json.loads(capsys.readouterr().out)["summary"]["feedback"] == feedback, tasker
+
+
+SMALL_IMAGES = """\
+room: {shape: rectangle, width: 6.0, depth: 5.0, height: 3.0}
+cameras:
+  intrinsics: {resolution: [64, 40], hfov_deg: 60, distortion: [0, 0, 0, 0, 0]}
+  poses:
+    - {number: 1, position: [0.1, 0.1, 2.5], yaw_deg: 40, pitch_deg: 20}
+    - {number: 2, position: [5.9, 4.9, 2.5], yaw_deg: -140, pitch_deg: 20}
+people: {count: 2, radius: 0.25}
+"""
+
+
+@pytest.mark.parametrize("command", [["run", "SCENE", "--k", "1"], ["render", "SCENE", "--out", "OUT"],
+                                     ["study", "lab", "--scene", "SCENE", "--k", "1", "--workers", "0"]])
+def test_a_default_column_threshold_too_high_says_it_is_the_default(command, capsys, tmp_path):
+    """Cameras 40 pixels tall have 50-pixel rectified columns, below the default
+    column_threshold 55: the error said '--params: ...' of a run given no --params."""
+    scene = tmp_path / "small.yaml"
+    scene.write_text(SMALL_IMAGES)
+    names = {"SCENE": str(scene), "OUT": str(tmp_path / "out")}
+    assert main([names.get(a, a) for a in command] + ["--frames", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].endswith(
+        "error: --params (not given: the default assets/pipeline/default.yaml): column_threshold 55 exceeds the "
+        "50 pixels of a rectified column; every scanline would be empty"), err
+    assert not (tmp_path / "out").exists()

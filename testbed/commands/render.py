@@ -64,7 +64,7 @@ def check_positive(name: str, value: int) -> int:
 
 def build_config(args: argparse.Namespace):
     """Validate the arguments (no rendering); return the :class:`EpisodeConfig` and its scene."""
-    from pipeline.params import load_params
+    from pipeline.params import load_params, params_option
     from pipeline.rectify import check_column_threshold
     from render.renderer import check_camera_numbers
     from testbed.cli import check_seed
@@ -90,7 +90,8 @@ def build_config(args: argparse.Namespace):
     check_camera_numbers("--cameras", config.cameras, [c.number for c in scene.cameras])
     config = canonical(config)                        # --people 3 of a scene of 3: the run without it
     check_column_threshold(config.params["column_threshold"], [c for c in scene.cameras if config.cameras is None
-                                                               or c.number in config.cameras], "--params")
+                                                               or c.number in config.cameras],
+                           params_option(args.params))
     silhouette_dtype(scene.people.count, "--people" if args.people is not None else "people.count")
     if args.format == "video":
         from testbed.lossless import check_frame_rate

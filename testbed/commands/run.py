@@ -89,6 +89,7 @@ def prepare(args):
     from tqdm import tqdm
 
     from pipeline import load_params
+    from pipeline.params import params_option
     from pipeline.rectify import check_column_threshold
     from scene import load_scene
     from testbed.cli import check_seed
@@ -110,7 +111,7 @@ def prepare(args):
     config = LoopConfig(args.tasker, args.k, *loop_options(args), args.near_field).check(
         len(scene.cameras), as_options=True)
     params = load_params(args.params, "--params")
-    check_column_threshold(params.column_threshold, scene.cameras, "--params")
+    check_column_threshold(params.column_threshold, scene.cameras, params_option(args.params))
     check_frames_fit(args.frames, config.k, scene.people.count, columns=scene.cameras[0].width)
     motion_rng, sensor_rng = np.random.default_rng(args.seed).spawn(2)
     # the walk is drawn before the first frame: ~0.2 ms a frame for 3 people, ~4 ms for 49,

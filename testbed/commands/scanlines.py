@@ -75,11 +75,12 @@ def run(args) -> int:
 def _run_render(args, params) -> int:
     from pipeline.core import Pipeline
     from pipeline.io import RenderDir, save_npz_atomic
+    from pipeline.params import params_option
     from pipeline.rectify import check_column_threshold
     from pipeline.runs import run_sequence
 
     render = RenderDir(episode_dir(Path(args.dir)))
-    check_column_threshold(params.column_threshold, render.cameras, "--params")
+    check_column_threshold(params.column_threshold, render.cameras, params_option(args.params))
     out = Path(args.out) if args.out is not None else default_output(render.root, "scanlines.npz")
     n = len(render) if args.frames is None else min(args.frames, len(render))
     render.check_complete(n)
@@ -153,6 +154,7 @@ def default_output(root: Path, name: str) -> Path:
 def _run_video(args, params) -> int:
     from pipeline.core import Pipeline
     from pipeline.io import check_camera, iter_video_frames, load_calibration, save_npz_atomic
+    from pipeline.params import params_option
     from pipeline.rectify import check_column_threshold
     from pipeline.runs import run_sequence
     from testbed.output import check_output_file
@@ -161,7 +163,7 @@ def _run_video(args, params) -> int:
         raise ValueError(f"--background: expected an integer >= 1, got {args.background}")
     cam = load_calibration(args.calibration, name="--calibration")
     check_camera(cam, f"--calibration: {Path(args.calibration).name}")
-    check_column_threshold(params.column_threshold, [cam], "--params")
+    check_column_threshold(params.column_threshold, [cam], params_option(args.params))
     source = Path(args.video).resolve()             # "." has a name once resolved
     out = Path(args.out) if args.out is not None else \
         check_output_file("--out", source.with_name(f"{source.stem}_scanlines.npz"))

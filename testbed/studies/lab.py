@@ -36,6 +36,7 @@ def add_arguments(p) -> None:
 
 def parse(args) -> dict:
     from pipeline import load_params
+    from pipeline.params import params_option
     from pipeline.rectify import check_column_threshold
     from scene import load_scene
     from testbed.episode import check_people_renderable, check_renderable, with_people
@@ -50,7 +51,8 @@ def parse(args) -> dict:
     core.check_count("frames", args.frames)
     update_every = core.check_period(args.update_every, 1, taskers)
     m = core.check_m(args.m, ks if "incremental" in taskers else [])
-    check_column_threshold(load_params(args.params, "--params").column_threshold, scene.cameras, "--params")
+    check_column_threshold(load_params(args.params, "--params").column_threshold, scene.cameras,
+                           params_option(args.params))
     # a trial keeps every camera's scanline of every frame (stacked: twice, for a moment)
     check_fits("--frames", args.frames, "frames", 2 * sum(c.width for c in scene.cameras) + 16 * args.people,
                "in each trial (every camera's scanlines of every frame)")
