@@ -417,6 +417,7 @@ def test_the_tasker_models_each_camera_by_the_view_of_its_scanline(monkeypatch):
      "--m: the cameras incremental greedy swaps per update; --tasker uniform swaps none (got --m 7)"),
     (["--tasker", "uniform", "--update-every", "5"],
      "--update-every: the re-tasking period of every tasker but uniform; --tasker uniform never re-tasks"),
+    (["--tasker", "uniform", "--update-every", "0"], "--update-every: expected an integer >= 1, got 0"),
 ])
 def test_run_refuses_a_loop_option_its_tasker_does_not_use(capsys, monkeypatch, argv, message):
     """--m with greedy and --update-every with uniform were silently unused, yet the summary

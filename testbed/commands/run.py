@@ -69,12 +69,15 @@ def loop_options(args) -> tuple[int, int, str]:
     one-line ValueError when one is given to a tasker that does not use it (``--m`` is
     incremental greedy's alone, uniform never re-tasks), as the studies refuse them: it was
     recorded as the run's own."""
+    from scene.checks import check_int
     from tasking import TASKERS, check_choice
 
     check_choice("--tasker", args.tasker, TASKERS)
     if args.m is not None and args.tasker != "incremental":
         raise ValueError(f"--m: the cameras incremental greedy swaps per update; --tasker {args.tasker} swaps none "
                          f"(got --m {args.m})")
+    if args.update_every is not None:
+        check_int("--update-every", args.update_every, minimum=1)      # as the studies: the value first
     if args.update_every is not None and args.tasker == "uniform":
         raise ValueError("--update-every: the re-tasking period of every tasker but uniform; --tasker uniform "
                          "never re-tasks")
