@@ -217,7 +217,7 @@ def export_episode(episode: str | os.PathLike, out: str | os.PathLike, layout: s
                 "position_id": "x_index + grid_width * y_index, x_index = floor((x - origin_m[0]) / cell_m), "
                                "y_index = floor((y - origin_m[1]) / cell_m)",
                 "views": {str(v): n for v, n in enumerate(numbers)}, "units": "metres, world frame",
-                "undistorted": bool(undistort), "boxes": box, "source": str(episode.resolve())}, indent=1) + "\n")
+                "undistorted": bool(undistort), "boxes": box, "source": os.path.abspath(episode)}, indent=1) + "\n")
             _replace_folder(tmp, out)
         except BaseException:
             if tmp is not None:

@@ -107,3 +107,23 @@ def test_a_dir_that_does_not_exist_or_is_a_file_is_named_so(episode, capsys):
     expected = " (expected a dataset or episode folder written by `camtask render`)"
     assert export_error(episode.parent / "nowhere", capsys) == f"DIR: {episode.parent / 'nowhere'}: no such folder{expected}"
     assert export_error(episode / "people.csv", capsys) == f"DIR: {episode / 'people.csv'}: not a folder{expected}"
+
+
+def test_an_episode_folder_that_is_a_link_is_checked_against_the_manifest_beside_the_link(episode, capsys):
+    """Resolved, the link led to the target's parent, where no manifest lists it: a changed file was
+    exported with only a warning."""
+    from testbed.checksum import file_digest
+
+    files = {p.relative_to(episode).as_posix(): file_digest(p) for p in sorted(episode.rglob("*")) if p.is_file()}
+    data = episode.parent / "data"
+    data.mkdir()
+    (data / "episode_0003").symlink_to(episode)
+    (data / "manifest.json").write_text(json.dumps(
+        {"format_version": 2, "episode_layout": 3, "checksum": "blake3", "episodes_planned": 4,
+         "episodes": [{"index": 3, "name": "episode_0003", "seed": 0, "spawn_key": [3], "frames": 1,
+                       "files": files}]}))
+    (episode / "people.csv").write_text("frame,person_id,x,y,radius,height\n0,0,3.0,2.0,0.25,1.75\n")
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(data / "episode_0003"), str(data.parent / "wt")]) == 2
+    assert capsys.readouterr().err.strip() == ("camtask export: error: DIR: episode_0003 differs from its manifest "
+                                               "(1 changed (people.csv)); `camtask verify` names every such file")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -142,7 +143,9 @@ def check_intact(episode: Path) -> None:
     when no manifest lists it (a folder copied out of its dataset, or left by a stopped run)."""
     from testbed.generate import episode_problems, manifest_algorithm, problems_text, read_manifest
 
-    episode = episode.resolve()            # "." or "x/.." has no name to look up, nor the dataset as parent
+    # "." or "x/.." has no name to look up, nor the dataset as parent; made absolute, not resolved:
+    # an episode folder that is a link is listed by the manifest beside the link, not its target's
+    episode = Path(os.path.abspath(episode))
     m = read_manifest(episode.parent)
     entry = next((e for e in (m or {}).get("episodes", []) if e["name"] == episode.name), None)
     if entry is None:
