@@ -74,15 +74,20 @@ def test_incremental_swaps_m_cameras_per_update(lab_episode):
             assert changed == 0
 
 
+def spy_on_tasker(monkeypatch, record):
+    """Call ``record(args)`` with the positional arguments of every choose_cameras call of the loop."""
+    import testbed.loop
+
+    real = testbed.loop.choose_cameras
+    monkeypatch.setattr(testbed.loop, "choose_cameras", lambda *a, **kw: record(a) or real(*a, **kw))
+
+
 @pytest.mark.parametrize("update_every", [1, 3])
 def test_the_tasker_runs_only_for_frames_that_follow(lab_episode, monkeypatch, update_every):
     """Cameras are chosen for the next frame: none after the last one."""
-    import testbed.loop
-
     scene, truth, source = lab_episode
     calls = []
-    real = testbed.loop.choose_cameras
-    monkeypatch.setattr(testbed.loop, "choose_cameras", lambda *a, **kw: calls.append(1) or real(*a, **kw))
+    spy_on_tasker(monkeypatch, lambda a: calls.append(1))
     n = len(list(run_loop(scene, LoopConfig("greedy", 6, update_every=update_every), truth, source)))
     assert len(calls) == 1 + (n - 1) // update_every  # the first frame is uniform
 
@@ -249,22 +254,14 @@ def test_the_near_field_switch_chooses_where_cameras_carve(lab_episode):
 def test_feedback_tracks_tasks_from_the_trackers_predictions(monkeypatch):
     """docs/network.md: with --feedback tracks "the tracker's confirmed tracks are the
     estimates instead" of the hull's polygon centres. No test ran feedback="tracks"."""
-    from test_loop import _disc_scanlines
-
-    import testbed.loop
     from pipeline.rectify import Rectifier
-    from scene import load_scene
-    from testbed.episode import walk
-    from testbed.loop import LoopConfig, PrecomputedSource, run_loop
 
     scene = load_scene("lab")
     truth = walk(scene, 8, np.random.default_rng(5))
     bearings = Rectifier.build(scene.cameras).bearings
     source = PrecomputedSource(_disc_scanlines(scene, truth, bearings), bearings)
     given = []
-    real = testbed.loop.choose_cameras
-    monkeypatch.setattr(testbed.loop, "choose_cameras",
-                        lambda *a, **kw: given.append(np.array(a[5])) or real(*a, **kw))
+    spy_on_tasker(monkeypatch, lambda a: given.append(np.array(a[5])))
     results = list(run_loop(scene, LoopConfig("greedy", 8, feedback="tracks"), truth, source))
     passed = given[1:]                                     # given[0]: the first frame's uniform set
     assert len(passed) == len(results) - 1
@@ -389,7 +386,6 @@ def test_the_tasker_models_each_camera_by_the_view_of_its_scanline(monkeypatch):
     scanline's columns. The optical axis and the pinhole's field of view (53.6 degrees) put
     the view of a camera whose principal point is 40 px from its image's left edge 20.4
     degrees off, and 3.3 degrees narrower than its barrel lens's."""
-    import testbed.loop
     from pipeline.rectify import Rectifier
     from scene import Scene
 
@@ -398,9 +394,7 @@ def test_the_tasker_models_each_camera_by_the_view_of_its_scanline(monkeypatch):
     bearings = Rectifier.build(scene.cameras).bearings
     source = PrecomputedSource(_disc_scanlines(scene, truth, bearings), bearings)
     given = []
-    real = testbed.loop.choose_cameras
-    monkeypatch.setattr(testbed.loop, "choose_cameras",
-                        lambda *a, **kw: given.append((np.array(a[3]), np.array(a[4]))) or real(*a, **kw))
+    spy_on_tasker(monkeypatch, lambda a: given.append((np.array(a[3]), np.array(a[4]))))
     list(run_loop(scene, LoopConfig("greedy", 1), truth, source))
     yaw, fov = given[-1]
     step = np.abs(np.diff(bearings, axis=1)).max()          # one column
