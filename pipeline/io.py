@@ -225,14 +225,24 @@ class RenderDir:
         return self._stack("masks", [self.root / "masks" / n / f for n in self.names], read_labels)
 
 
+def number_order(name: str) -> tuple:
+    """A sort key that orders the numbers in names by value: ``frame2`` before ``frame10``
+    (as text, ``frame10`` came first), zero-padded names as text does; equal keys (``f01``,
+    ``f1``) by the name itself."""
+    parts = re.split(r"(\d+)", name)                     # text, number, text, ...: aligned
+    return tuple(int(t) if k % 2 else t for k, t in enumerate(parts)), name
+
+
 def iter_video_frames(source: str | os.PathLike, name: str = "--video"):
-    """Yield (H, W, 3) uint8 RGB frames of a video file or of a folder of images (sorted).
+    """Yield (H, W, 3) uint8 RGB frames of a video file or of a folder of images (in the
+    order of the numbers in their names, :func:`number_order`).
 
     name : what error messages start with: the option that gave ``source``.
     """
     source = Path(source)
     if source.is_dir():
-        files = sorted(p for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+        files = sorted((p for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES),
+                       key=lambda p: number_order(p.name))
         if not files:
             raise ValueError(f"{name}: folder {str(source)!r} has no images ({', '.join(IMAGE_SUFFIXES)})")
         for p in files:

@@ -86,3 +86,15 @@ def test_frames_of_a_camera_without_its_calibration_are_refused(tmp_path):
     lost.unlink()
     with pytest.raises(ValueError, match=rf"^DIR: frames/{lost.stem} has no calibration/{lost.stem}.yaml; "):
         RenderDir(tmp_path)
+
+
+def test_a_folder_of_images_is_read_in_the_order_of_their_numbers(tmp_path):
+    """frame10.png came before frame2.png (sorted as text): unpadded numbers put the frames out of time
+    order, which the temporal smoothing then mixed up, without a word."""
+    folder = tmp_path / "clip"
+    folder.mkdir()
+    for i in (1, 2, 3, 10, 11, 20):
+        cv2.imwrite(str(folder / f"frame{i}.png"), np.full((4, 6, 3), i, np.uint8))
+    cv2.imwrite(str(folder / "frame010b.png"), np.full((4, 6, 3), 99, np.uint8))   # after frame10: same number, longer
+    order = [int(f[0, 0, 0]) for f in iter_video_frames(folder)]
+    assert order == [1, 2, 3, 10, 99, 11, 20]

@@ -9,7 +9,7 @@ A render directory gives ``DIR/scanlines.npz`` (``scanlines``, ``gt_scanlines``
 (n_cams,) int and, when its people's size is known, ``blind_radius``, ``sight_radius``,
 ``gt_blind_radius``, ``gt_sight_radius`` (n_cams,) float metres) and the CDnet metrics of the scanline columns and of the foreground
 pixels. An episode of a dataset written by ``camtask render`` needs ``--out``: the
-dataset's manifest checksums its files. A video (or a folder of images, sorted) gives
+dataset's manifest checksums its files. A video (or a folder of images, by the numbers in their names) gives
 ``scanlines`` (n_frames, 1, W), ``bearings`` (1, W) and ``camera_numbers`` (1,); its
 first N frames (``--background N``) are the background and ``--frames`` counts the frames
 after them. Files are written atomically, only when the run completes.
@@ -40,7 +40,7 @@ def add_parser(subparsers) -> None:
                                                  "beside --video; required for an episode of a dataset)")
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON document")
     p.add_argument("--video", metavar="FILE_OR_FOLDER",
-                   help="a video file, or a folder of images (sorted by name), instead of a render directory")
+                   help="a video file, or a folder of images (frame2 before frame10), instead of a render directory")
     p.add_argument("--calibration", metavar="FILE", help="camera calibration (OpenCV YAML) of the --video camera")
     p.add_argument("--background", type=int, metavar="N",
                    help="with --video: its first N frames are the empty scene, the background")
