@@ -55,9 +55,14 @@ def virtual_extent(camera: Camera) -> tuple[float, float, float, float]:
     x, y = level_points(camera, _border_points(camera.width, camera.height, per_side))
     left, right = x[2 * per_side:3 * per_side], x[3 * per_side:]
     if right.min() <= left.max():
+        u, v = camera.K[0, 2], camera.K[1, 2]
+        cu, cv = (camera.width - 1) / 2, (camera.height - 1) / 2
+        if abs(u - cu) > camera.width / 4 or abs(v - cv) > camera.height / 4:
+            why = f"its principal point {u:g}, {v:g} is far from the image's centre {cu:g}, {cv:g}"
+        else:                       # a centred lens: its distortion bends the side edges across
+            why = f"its lens distortion {np.round(camera.dist, 4).tolist()} bends the image's sides too far"
         raise ValueError(f"camera {camera.number}: once turned level, no column of its image spans the image's whole "
-                         f"height (principal point {camera.K[0, 2]:g}, {camera.K[1, 2]:g} pixels far from the "
-                         "image's centre?); it cannot be rectified to a level camera")
+                         f"height ({why}); it cannot be rectified to a level camera")
     return float(left.max()), float(right.min()), float(y.min()), float(y.max())
 
 

@@ -212,3 +212,17 @@ def test_every_command_names_the_params_option_the_user_typed(tmp_path, capsys, 
         err = capsys.readouterr().err
         assert err.startswith(f"camtask {argv[0]}: error: --params: ") and why in err and err.count("\n") == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_a_camera_that_cannot_be_levelled_is_told_why():
+    """A centred lens was told its principal point (319.5, 239.5) was 'far from the image's centre?'."""
+    from pipeline.rectify import virtual_extent
+
+    head = "camera 3: once turned level, no column of its image spans the image's whole height ("
+    tail = "); it cannot be rectified to a level camera"
+    with pytest.raises(ValueError) as err:
+        virtual_extent(lab_like((-0.6, 0, 0, 0, 0)))
+    assert str(err.value) == head + "its lens distortion [-0.6, 0.0, 0.0, 0.0, 0.0] bends the image's sides too far" + tail
+    with pytest.raises(ValueError) as err:
+        virtual_extent(lab_like(principal=(2000, 240)))
+    assert str(err.value) == head + "its principal point 2000, 240 is far from the image's centre 319.5, 239.5" + tail
