@@ -145,21 +145,23 @@ def load_episode_scene(config: EpisodeConfig):
     return with_people(scene, config.people)
 
 
-def scene_own(config: EpisodeConfig) -> tuple[int, tuple[int, ...]]:
-    """The number of people and the camera numbers (in the file's order) of ``config``'s
-    scene itself, whatever ``config.people`` and ``config.cameras`` ask for."""
+def without_scene_own(values: dict, config: EpisodeConfig) -> dict:
+    """``values`` (in the form of :meth:`EpisodeConfig.to_dict`) with ``people`` and
+    ``cameras`` None where they name the scene of ``config`` itself: its number of people,
+    every camera in the file's order. Other keys as they are."""
     own = load_episode_scene(dataclasses.replace(config, people=None))
-    return own.people.count, tuple(c.number for c in own.cameras)
+    owns = {"people": own.people.count, "cameras": [c.number for c in own.cameras]}
+    return {k: None if k in owns and v == owns[k] else v for k, v in values.items()}
 
 
 def canonical(config: EpisodeConfig) -> EpisodeConfig:
     """``config`` with ``people`` and ``cameras`` None where they name the scene's own: ``--people
     3`` on a scene of 3 people, or every camera in the scene file's order, renders the same
     episodes as leaving them out, so it is the same run (the same manifest, and ``--resume``
-    takes either)."""
-    count, numbers = scene_own(config)
-    return dataclasses.replace(config, people=None if config.people == count else config.people,
-                               cameras=None if config.cameras == numbers else config.cameras)
+    takes either; :func:`without_scene_own`)."""
+    values = without_scene_own(config.to_dict(), config)
+    return dataclasses.replace(config, people=values["people"],
+                               cameras=None if values["cameras"] is None else config.cameras)
 
 
 def _renderer(config: EpisodeConfig, scene):

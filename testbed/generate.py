@@ -37,7 +37,13 @@ from pathlib import Path
 from scene.checks import names
 from testbed import stops
 from testbed.checksum import ALGORITHM, ALGORITHMS
-from testbed.episodes import EpisodeConfig, checksums, episode_name, render_episode, scene_own
+from testbed.episodes import (
+    EpisodeConfig,
+    checksums,
+    episode_name,
+    render_episode,
+    without_scene_own,
+)
 from testbed.output import PROBE  # the files check_out and check_workers_share make and remove
 from testbed.parallel import default_workers
 
@@ -456,9 +462,7 @@ def _canonical_dict(was, config: EpisodeConfig):
     people); anything else as it is."""
     if not isinstance(was, dict) or was.get("scene") != config.scene:
         return was
-    count, numbers = scene_own(config)
-    own = {"people": count, "cameras": list(numbers)}
-    return {k: None if k in own and v == own[k] else v for k, v in was.items()}
+    return without_scene_own(was, config)
 
 
 def _diff(old: dict, config: EpisodeConfig) -> str:
