@@ -28,6 +28,15 @@ def check_choice(name: str, value: Any, valid: Iterable[str]) -> str:
     return value
 
 
+def used_or_refused(name: str, value: Any, used: bool, what: str, why: str) -> bool:
+    """Whether option ``name`` is ``used`` by the run; a ``value`` given (not None) where it
+    is not is refused in one line, ``name: what; why`` (silently unused, it was recorded as
+    the run's own). The caller records None for an unused option left out."""
+    if not used and value is not None:
+        raise ValueError(f"{name}: {what}; {why}")
+    return used
+
+
 def check_input_file(name: str, path: str | os.PathLike) -> Path:
     """``path`` as a Path if it is a regular file to read, else a one-line error.
 

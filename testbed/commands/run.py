@@ -69,20 +69,17 @@ def loop_options(args) -> tuple[int, int, str]:
     one-line ValueError when one is given to a tasker that does not use it (``--m`` is
     incremental greedy's alone, uniform never re-tasks), as the studies refuse them: it was
     recorded as the run's own."""
-    from scene.checks import check_int
+    from scene.checks import check_int, used_or_refused
     from tasking import TASKERS, check_choice
 
     check_choice("--tasker", args.tasker, TASKERS)
-    if args.m is not None and args.tasker != "incremental":
-        raise ValueError(f"--m: the cameras incremental greedy swaps per update; --tasker {args.tasker} swaps none "
-                         f"(got --m {args.m})")
+    used_or_refused("--m", args.m, args.tasker == "incremental", "the cameras incremental greedy swaps per update",
+                    f"--tasker {args.tasker} swaps none (got --m {args.m})")
     if args.update_every is not None:
         check_int("--update-every", args.update_every, minimum=1)      # as the studies: the value first
-    if args.update_every is not None and args.tasker == "uniform":
-        raise ValueError("--update-every: the re-tasking period of every tasker but uniform; --tasker uniform "
-                         "never re-tasks")
-    if args.feedback is not None and args.tasker == "uniform":
-        raise ValueError("--feedback: the estimates the tasker re-tasks from; --tasker uniform never re-tasks")
+    for name, value, what in (("--update-every", args.update_every, "the re-tasking period of every tasker but uniform"),
+                              ("--feedback", args.feedback, "the estimates the tasker re-tasks from")):
+        used_or_refused(name, value, args.tasker != "uniform", what, "--tasker uniform never re-tasks")
     return ((1 if args.m is None else args.m), (1 if args.update_every is None else args.update_every),
             args.feedback or "hull")
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from scene.checks import used_or_refused
 from testbed.output import save_figure
 
 from . import core
@@ -62,9 +63,8 @@ def parse(args) -> dict:
             raise ValueError(f"--limit-cameras: expected more cameras than the largest --cameras "
                              f"({max(cameras)}), got {limit}")
     core.check_discs(max(objects), args.radius)
-    if limit is not None and args.quadrature is not None:       # else unused, and recorded as used
-        raise ValueError(f"--quadrature: the row spacing of the exact limit (--limit-cameras inf); "
-                         f"--limit-cameras {limit} takes none")
+    used_or_refused("--quadrature", args.quadrature, limit is None, "the row spacing of the exact limit "
+                    "(--limit-cameras inf)", f"--limit-cameras {limit} takes none")
     quadrature = args.radius / QUADRATURE_PER_RADIUS if args.quadrature is None else args.quadrature
     if not args.radius / 1000 <= quadrature <= args.radius / 2:     # at least four rows across a disc
         raise ValueError(f"--quadrature: expected a number in [radius / 1000, radius / 2] = "

@@ -18,6 +18,7 @@ from functools import lru_cache
 import numpy as np
 from shapely.geometry import Polygon
 
+from scene.checks import used_or_refused
 from scene.motion import circle_polygon
 from tasking import TASKERS, choose_cameras, polygon_centres, prune_small, visual_hull_of_discs
 from testbed.output import save_figure
@@ -258,10 +259,9 @@ def check_period(value: int | None, default: int, taskers) -> int | None:
     at least 1. Uniform never re-tasks: with no other tasker among ``taskers`` a given value
     is refused, and the period is None (recorded so, not as a period nothing used)."""
     period = default if value is None else check_count("update-every", value)
-    if all(t == "uniform" for t in taskers):
-        if value is not None:
-            raise ValueError(f"--update-every: the re-tasking period of every tasker but uniform; "
-                             f"{', '.join(dict.fromkeys(taskers))} alone never re-tasks")
+    if not used_or_refused("--update-every", value, any(t != "uniform" for t in taskers),
+                           "the re-tasking period of every tasker but uniform",
+                           f"{', '.join(dict.fromkeys(taskers))} alone never re-tasks"):
         return None
     return period
 
@@ -270,10 +270,8 @@ def check_m(m: int | None, ks) -> int | None:
     """``--m`` (None when not given: 1), at least 1 and at most the smallest of ``ks``, the k
     that incremental greedy runs with. Empty ``ks``: no incremental tasker uses ``--m``, so a
     given value is refused and the result is None (recorded so, not as swaps nobody made)."""
-    if not len(ks):
-        if m is not None:
-            raise ValueError(f"--m: the cameras incremental greedy swaps per update; no incremental tasker "
-                             f"runs (got --m {m})")
+    if not used_or_refused("--m", m, bool(len(ks)), "the cameras incremental greedy swaps per update",
+                           f"no incremental tasker runs (got --m {m})"):
         return None
     m = 1 if m is None else check_count("m", m)
     if m > min(ks):

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from scene.checks import used_or_refused
 from testbed.output import save_figure
 
 from . import core
@@ -51,10 +52,8 @@ def parse(args) -> dict:
     ks = core.parse_k(args.k, args.candidates, f"the {args.candidates} candidates")
     taskers = core.parse_names("taskers", args.taskers, TASKERS)
     us = core.parse_ints("update-every", UPDATE_EVERY if args.update_every is None else args.update_every, minimum=1)
-    if "incremental" not in taskers:            # else unused, and recorded as used
-        if args.update_every is not None:
-            raise ValueError(f"--update-every: incremental's re-tasking periods; --taskers {','.join(taskers)} "
-                             "runs no incremental")
+    if not used_or_refused("--update-every", args.update_every, "incremental" in taskers,
+                           "incremental's re-tasking periods", f"--taskers {','.join(taskers)} runs no incremental"):
         us = None
     m = core.check_m(args.m, ks if "incremental" in taskers else [])
     core.check_count("steps", args.steps, 2)

@@ -12,6 +12,8 @@ from math import comb
 
 import numpy as np
 
+from scene.checks import used_or_refused
+
 from . import core
 
 STUDY_ID = 1
@@ -41,10 +43,8 @@ def parse(args) -> dict:
     ks = core.parse_k(args.k, args.candidates, f"the {args.candidates} candidates")
     taskers = core.parse_names("taskers", args.taskers, TASKERS)
     max_subsets = MAX_SUBSETS if args.max_subsets is None else core.check_count("max-subsets", args.max_subsets)
-    if "optimal" not in taskers:                # else unused, and recorded as used
-        if args.max_subsets is not None:
-            raise ValueError(f"--max-subsets: the limit of optimal's subsets; --taskers {','.join(taskers)} "
-                             "runs no optimal")
+    if not used_or_refused("--max-subsets", args.max_subsets, "optimal" in taskers,
+                           "the limit of optimal's subsets", f"--taskers {','.join(taskers)} runs no optimal"):
         max_subsets = None
     worst = max(ks, key=lambda k: comb(args.candidates, k))
     if max_subsets is not None and comb(args.candidates, worst) > max_subsets:

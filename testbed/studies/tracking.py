@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from scene.checks import used_or_refused
 from scene.motion import random_waypoint
 from tasking.track_metrics import tracking_metrics
 from tasking.tracker import Tracker, TrackerParams
@@ -71,9 +72,9 @@ def parse(args) -> dict:
                "in each episode (the walk, its tracks and py-motmetrics' events of every step)")
     core.check_bounded("speed", args.speed, 0.0, core.MAX_SPEED, low_open=True)
     m = core.check_m(args.m, [k for name, k in pairs if name == "incremental"])
-    feedback = None if update_every is None else args.feedback or "hull"     # uniform alone: none
-    if update_every is None and args.feedback is not None:
-        raise ValueError("--feedback: the estimates the taskers re-task from; uniform alone never re-tasks")
+    used = used_or_refused("--feedback", args.feedback, update_every is not None,     # uniform alone: none
+                           "the estimates the taskers re-task from", "uniform alone never re-tasks")
+    feedback = (args.feedback or "hull") if used else None
     return {"pairs": pairs, "objects": args.objects, "steps": args.steps,
             "update_every": update_every, "m": m, "radius": radius, "speed": args.speed,
             "feedback": feedback}
