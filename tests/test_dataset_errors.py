@@ -570,3 +570,21 @@ def test_overwrite_stopped_while_it_deletes_can_be_overwritten_again(tmp_path, c
                      "--cameras", "2")
     assert code == 0, line
     assert sorted(p.name for p in out.iterdir()) == ["episode_0000", "manifest.json", "run_info.json"]
+
+
+def test_overwrite_keeps_the_old_dataset_until_the_local_workers_are_up(tmp_path, capsys, monkeypatch):
+    """--overwrite deleted the old episodes first, then started the local cluster: a cluster
+    that failed to start (memory, ports) left the user with neither dataset."""
+    import testbed.parallel
+
+    out = tmp_path / "ds"
+    assert main(["render", "lab", "--out", str(out), "--workers", "0", "--frames", "1", "--cameras", "1"]) == 0
+
+    def no_cluster(*args, **kwargs):
+        raise OSError("the local cluster did not start")
+
+    monkeypatch.setattr(testbed.parallel, "open_client", no_cluster)
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "2", "--episodes", "2", "--frames", "1",
+                     "--cameras", "1", "--overwrite")
+    assert code != 0 and line == "camtask render: error: the local cluster did not start"
+    assert (out / "episode_0000").is_dir() and (out / "manifest.json").is_file()

@@ -222,8 +222,9 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     started = False
     try:
         if args.scheduler is None:
-            # local workers: no more than the episodes left to render (one, or none: in this process)
-            keep = _prepare(args, config, out)
+            # local workers: no more than the episodes left to render (one, or none: in this
+            # process); --overwrite keeps none, but deletes them only once the workers are up
+            keep = {} if args.overwrite else _prepare(args, config, out)
             left = args.episodes - len(keep)
             workers = 0 if left <= 1 else min(workers, left)
         with open_client(workers, args.scheduler) as client:
@@ -231,6 +232,7 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
                 wait_for_a_worker(client, args.scheduler)           # checked below, then rendered
                 check_worker_versions(client)
                 check_workers_share(client, out)
+            if args.scheduler is not None or args.overwrite:
                 keep = _prepare(args, config, out)
             todo = args.episodes - len(keep)
             if todo == 0:
