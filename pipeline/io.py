@@ -233,6 +233,13 @@ def number_order(name: str) -> tuple:
     return tuple(int(t) if k % 2 else t for k, t in enumerate(parts)), name
 
 
+def image_files(folder: Path) -> list[Path]:
+    """The images of ``folder`` in the order :func:`iter_video_frames` reads them: by the
+    numbers in their names (:func:`number_order`)."""
+    return sorted((p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES),
+                  key=lambda p: number_order(p.name))
+
+
 def iter_video_frames(source: str | os.PathLike, name: str = "--video"):
     """Yield (H, W, 3) uint8 RGB frames of a video file or of a folder of images (in the
     order of the numbers in their names, :func:`number_order`).
@@ -241,8 +248,7 @@ def iter_video_frames(source: str | os.PathLike, name: str = "--video"):
     """
     source = Path(source)
     if source.is_dir():
-        files = sorted((p for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES),
-                       key=lambda p: number_order(p.name))
+        files = image_files(source)
         if not files:
             raise ValueError(f"{name}: folder {str(source)!r} has no images ({', '.join(IMAGE_SUFFIXES)})")
         for p in files:

@@ -188,3 +188,20 @@ def test_cameras_of_two_resolutions_are_named_by_their_files(render_dir, tmp_pat
     assert str(err.value) == (f"DIR: calibration/{names[-1]} is {2 * cam.width}x{2 * cam.height} pixels, "
                               f"calibration/{names[0]} {cam.width}x{cam.height}; the node pipeline takes "
                               "cameras of one resolution")
+
+
+def test_a_frame_of_another_size_is_named_in_a_folder_whose_numbers_are_unpadded(render_dir, tmp_path):
+    """The frames are read in the order of the numbers in their names (frame2 before frame10),
+    but the message took the name from the folder sorted as text: a wrong frame2.png was
+    reported as frame10.png."""
+    import cv2
+
+    calib = str(render_dir / "calibration" / "cam01.yaml")
+    image = cv2.imread(str(min((render_dir / "frames" / "cam01").iterdir())))
+    folder = tmp_path / "unpadded"
+    folder.mkdir()
+    for i in range(12):
+        cv2.imwrite(str(folder / f"frame{i}.png"), cv2.resize(image, (80, 60)) if i == 2 else image)
+    with pytest.raises(ValueError, match=rf"^--video: {re.escape(str(folder / 'frame2.png'))} is 80 x 60 pixels"):
+        camtask(["scanlines", "--video", str(folder), "--calibration", calib, "--background", "1",
+                 "--out", str(tmp_path / "s.npz")])

@@ -192,9 +192,9 @@ def _run_video(args, params) -> int:
 def _sized(frames, source: Path, cam, calibration: str):
     """``frames`` (H, W, 3) of ``source``, each as large as the calibration ``cam`` says; else
     a one-line error naming the frame (its file, for a folder), --video and --calibration."""
-    from pipeline.io import IMAGE_SUFFIXES
+    from pipeline.io import image_files
 
-    names = sorted(p.name for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES) if source.is_dir() else []
+    names = [p.name for p in image_files(source)] if source.is_dir() else []
     for i, frame in enumerate(frames):
         if frame.shape[:2] != (cam.height, cam.width):
             what = f"{source / names[i]}" if i < len(names) else \
