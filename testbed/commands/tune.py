@@ -1,6 +1,7 @@
 """``camtask tune``: search the pipeline parameters for the best scanline F1 (Optuna TPE).
 
     camtask tune DIR --trials N [--out params.yaml] [--seed S] [--plot FILE.png] [--frames N]
+                     [--params FILE] [--json]
 
 The first trial is the starting parameters (``--params``, default the defaults); the best
 are written as YAML (default DIR/tuned_params.yaml; ``--out`` is required for an episode
@@ -27,11 +28,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("dir", metavar="DIR", help="render directory (from `camtask render`), or a dataset of one episode")
     p.add_argument("--trials", type=int, required=True, help="number of Optuna trials")
     p.add_argument("--seed", type=int, default=0, help="sampler seed (default 0)")
-    p.add_argument("--out", help="best parameters YAML (default DIR/tuned_params.yaml; "
+    p.add_argument("--out", metavar="FILE", help="best parameters YAML (default DIR/tuned_params.yaml; "
                                  "required for an episode of a dataset)")
-    p.add_argument("--plot", help="PNG of F1 per trial and best so far")
+    p.add_argument("--plot", metavar="FILE.png", help="PNG of F1 per trial and best so far")
     p.add_argument("--params", metavar="FILE", help="starting parameters YAML (default assets/pipeline/default.yaml)")
-    p.add_argument("--frames", type=int, default=30, help="use at most this many frames (default 30)")
+    p.add_argument("--frames", metavar="N", type=int, default=30, help="use at most this many frames (default 30)")
     p.add_argument("--json", action="store_true", help="print the result as one JSON document")
     p.set_defaults(func=run)
 
