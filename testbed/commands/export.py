@@ -1,4 +1,4 @@
-"""``camtask export wildtrack|multiviewx DIR OUT [--episode N] [--undistort] [--boxes visible|unoccluded]``.
+"""``camtask export wildtrack|multiviewx DIR OUT [--episode N] [--undistort] [--boxes visible|unoccluded] [--overwrite]``.
 
 An episode in the WILDTRACK or MultiviewX layout. See :mod:`testbed.wildtrack` and
 docs/dataset.md for the layouts, the ground grid and positionID.
