@@ -110,7 +110,7 @@ def run_trials(m, start, stop, cameras, limit_cameras, radius, h, seed) -> np.nd
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
     tasks, weights, keys = [], [], []
     for m in opts["objects"]:
-        for a, b in _chunks(trials, CHUNK):
+        for a, b in core.chunks(trials, CHUNK):
             tasks.append((m, a, b, opts["cameras"], opts["limit_cameras"], opts["radius"],
                           opts["quadrature"], seed))
             weights.append(b - a)
@@ -140,10 +140,6 @@ def run(opts: dict, trials: int, seed: int, runner) -> dict:
         })
         fits.append(_fit(m, [r for r in records if r["objects"] == m and not r["limit"]], opts["fit_min"]))
     return {"records": records, "fits": fits}
-
-
-def _chunks(n, size):
-    return [(s, min(s + size, n)) for s in range(0, n, size)]
 
 
 def _fit(m, recs, fit_min) -> dict:

@@ -78,7 +78,7 @@ def run_trials(start, stop, opts, seed) -> np.ndarray:
 
 
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
-    chunks = [(s, min(s + CHUNK, trials)) for s in range(0, trials, CHUNK)]
+    chunks = core.chunks(trials, CHUNK)
     res = np.concatenate(runner(run_trials, [(a, b, opts, seed) for a, b in chunks],
                                 [b - a for a, b in chunks], "static"))
     records = []
