@@ -67,3 +67,25 @@ def test_every_command_refuses_an_output_beside_a_datasets_manifest(render_dir, 
     assert re.match(rf"^camtask {command[0]}: error: --(out|video|plot): .* is in the dataset .*ds, beside its "
                     r"manifest.json", err), err
     assert {p.name: p.read_bytes() for p in dataset.iterdir() if p.is_file()} == before
+
+
+@pytest.mark.parametrize("command, default", [(["tune", "--trials", "1"], "tuned_params.yaml"),
+                                              (["scanlines"], "scanlines.npz")])
+def test_a_default_output_that_cannot_be_written_is_refused_before_any_work(render_dir, tmp_path, monkeypatch,
+                                                                           command, default):
+    """Without --out the file goes into DIR; a folder of that name was found only when the
+    search (or run) was over: "cannot write DIR/tuned_params.yaml: Is a directory"."""
+    import shutil
+
+    import pipeline.tuning
+    from pipeline.io import RenderDir
+
+    def stop(*args, **kwargs):
+        raise AssertionError("work started")
+    monkeypatch.setattr(RenderDir, "frames", stop)
+    monkeypatch.setattr(pipeline.tuning, "tune", stop)
+    root = tmp_path / "r"
+    shutil.copytree(render_dir, root)
+    (root / default).mkdir()
+    with pytest.raises(ValueError, match=rf"^--out: {re.escape(str(root / default))} is a folder; expected a file name$"):
+        camtask([command[0], str(root)] + command[1:])

@@ -139,16 +139,17 @@ def default_output(root: Path, name: str) -> Path:
     Not into an episode of a dataset (a folder ``episode_*`` beside a ``manifest.json``): the
     manifest holds the checksum of each of its files, so a file replaced or added there makes
     ``camtask verify`` fail and ``camtask render --resume`` render the episode again. That
-    is a one-line error asking for ``--out``, raised before any work.
+    is a one-line error asking for ``--out``, raised before any work; so is a name there
+    that cannot be written (a folder of that name), as for a given ``--out``.
     """
-    from testbed.output import episode_of
+    from testbed.output import check_output_file, episode_of
 
     real = root.resolve()                           # "." names no episode, its real path does
     if episode_of(root, itself=True) == real:
         dataset = root.parent if root.name == real.name else real.parent
         raise ValueError(f"--out: {root} is an episode of the dataset {dataset}, whose manifest.json "
                          f"checksums its files; give --out FILE to write {name} elsewhere")
-    return root / name
+    return check_output_file("--out", root / name)
 
 
 def _run_video(args, params) -> int:
