@@ -49,8 +49,16 @@ def test_every_trial_is_drawn_inside_the_axes_and_clear_of_the_legend(figure, f1
         assert not (legend.x0 <= x <= legend.x1 and legend.y0 <= y <= legend.y1), (x, y)
 
 
-def test_trials_are_counted_in_whole_numbers_and_the_title_gives_the_result(figure):
-    ax = figure([0.9973, 0.89, 0.9986]).axes[0]
+@pytest.mark.parametrize("f1", [[0.9973, 0.89, 0.9986], [0.9973]])
+def test_trials_are_counted_in_whole_numbers(figure, f1):
+    """One trial (`--trials 1`) was drawn on an axis ticked 0.945, 0.960, ... 1.050."""
+    ax = figure(f1).axes[0]
     ticks = [t for t in ax.get_xticks() if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
     assert ticks and all(t == int(t) for t in ticks), ticks
+    labels = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
+    assert labels and all(text.isdigit() for text in labels), labels
+
+
+def test_the_title_gives_the_result(figure):
+    ax = figure([0.9973, 0.89, 0.9986]).axes[0]
     assert ax.get_title() == "best scanline F1 0.9986 (trial 3 of 3); start 0.9973"

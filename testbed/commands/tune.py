@@ -161,7 +161,8 @@ def history_figure(f1):
     lo, hi = (np.log(x / (1 - x)) for x in (shown.min(), shown.max()))
     pad = max(0.05 * (hi - lo), 0.2)
     ax.set_ylim(*(1 / (1 + np.exp(-y)) for y in (lo - pad, hi + pad)))
-    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    # integer ticks even where only one fits (one trial): else it fell back to 0.945, 0.96, ...
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True, min_n_ticks=1))
     ax.yaxis.set_major_formatter(FuncFormatter(_decimal))
     shown_major = [y for y in ax.get_yticks() if ax.get_ylim()[0] <= y <= ax.get_ylim()[1]]
     # fewer than two labelled lines within one decade of errors: label the ones between too
