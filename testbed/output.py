@@ -153,6 +153,11 @@ def check_outside_episodes(option: str, out: str | os.PathLike) -> None:
 def save_figure(fig, path: str | os.PathLike, dpi: float = 80) -> None:
     """Draw matplotlib figure ``fig`` as a PNG to ``path`` (its folder made when missing),
     atomically, and close the figure."""
+    write_atomic(path, figure_png(fig, dpi))          # makes the folder when missing
+
+
+def figure_png(fig, dpi: float = 80) -> bytes:
+    """Matplotlib figure ``fig`` drawn as PNG bytes in memory; the figure is closed."""
     import matplotlib.pyplot as plt
 
     png = io.BytesIO()
@@ -160,4 +165,4 @@ def save_figure(fig, path: str | os.PathLike, dpi: float = 80) -> None:
         fig.savefig(png, format="png", dpi=dpi)
     finally:
         plt.close(fig)
-    write_atomic(path, png.getvalue())          # makes the folder when missing
+    return png.getvalue()

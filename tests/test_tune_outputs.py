@@ -89,3 +89,22 @@ def test_a_default_output_that_cannot_be_written_is_refused_before_any_work(rend
     (root / default).mkdir()
     with pytest.raises(ValueError, match=rf"^--out: {re.escape(str(root / default))} is a folder; expected a file name$"):
         camtask([command[0], str(root)] + command[1:])
+
+
+def test_ctrl_c_while_the_plot_is_drawn_leaves_the_earlier_files(render_dir, tmp_path, monkeypatch):
+    """The YAML was written before the plot was drawn (~1.5 s): Ctrl-C then said
+    "interrupted" and left this run's parameters beside the previous run's plot."""
+    from testbed.commands import tune as tune_cmd
+
+    out, plot = tmp_path / "t.yaml", tmp_path / "t.png"
+    out.write_text("# an earlier search\n")
+    plot.write_bytes(b"an earlier plot")
+
+    def interrupted(f1):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(tune_cmd, "history_figure", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        camtask(["tune", str(render_dir), "--trials", "2", "--out", str(out), "--plot", str(plot), "--json"])
+    assert out.read_text() == "# an earlier search\n"
+    assert plot.read_bytes() == b"an earlier plot"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.png", "t.yaml"]
