@@ -95,3 +95,16 @@ def test_scanlines_refuses_a_missing_file_of_the_frames_used_before_reading(rend
     with pytest.raises(ValueError, match=r"^DIR: .*r lacks 1 file of its first 3 frames: masks/cam01/000002.png$"):
         camtask(["scanlines", str(root), "--out", str(tmp_path / "s.npz")])
     assert not (tmp_path / "s.npz").exists()
+
+
+def test_a_column_threshold_above_the_rectified_column_is_refused_first(render_dir, tmp_path, no_work):
+    """scanlines, render and run refuse it (every scanline would be empty); tune searched
+    from it, reported F1 0 and could write it as the best: a file scanlines then refused."""
+    from pipeline import PipelineParams
+
+    PipelineParams(column_threshold=500.0).to_yaml(tmp_path / "p.yaml")
+    with pytest.raises(ValueError, match=r"^--params: column_threshold 500 exceeds the \d+ pixels of a rectified "
+                                         r"column; every scanline would be empty$"):
+        camtask(["tune", str(render_dir), "--trials", "1", "--params", str(tmp_path / "p.yaml"),
+                 "--out", str(tmp_path / "t.yaml")])
+    assert not (tmp_path / "t.yaml").exists()

@@ -41,7 +41,8 @@ def run(args) -> int:
     from pipeline.core import Pipeline
     from pipeline.files import write_atomic
     from pipeline.io import RenderDir
-    from pipeline.params import load_params
+    from pipeline.params import load_params, params_option
+    from pipeline.rectify import check_column_threshold
     from pipeline.tuning import outside_space, tune
     from testbed.cli import check_seed
     from testbed.commands.scanlines import default_output, episode_dir
@@ -55,10 +56,12 @@ def run(args) -> int:
     if args.plot is not None:
         check_output_file("--plot", args.plot, ".png")
     start = load_params(args.params, "--params")
+    render = RenderDir(episode_dir(Path(args.dir)))
+    # as scanlines refuses it: a start no other command runs, and the best if no trial beats it
+    check_column_threshold(start.column_threshold, render.cameras, params_option(args.params))
     for name, (value, low, high) in outside_space(start).items():
         print(f"warning: --params: {name} {value:g} is outside the searched range {low:g}..{high:g}: the first "
               "trial uses it, the others search the range (docs/pipeline.md)", file=sys.stderr)
-    render = RenderDir(episode_dir(Path(args.dir)))
     out = check_output_file("--out", args.out) if args.out is not None else \
         default_output(render.root, "tuned_params.yaml")
     if args.plot is not None and Path(args.plot).resolve() == out.resolve():
