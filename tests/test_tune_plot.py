@@ -3,19 +3,14 @@
 import numpy as np
 import pytest
 
-import testbed.output
-from testbed.commands.tune import plot_history
+from testbed.commands.tune import history_figure
 
 
 @pytest.fixture
-def figure(monkeypatch, tmp_path):
-    """Draw with plot_history and return the figure it would have written."""
-    figures = []
-    monkeypatch.setattr(testbed.output, "save_figure", lambda fig, path, dpi=80: figures.append(fig))
-
+def figure():
+    """Draw the figure that tune --plot writes (history_png) and return it."""
     def draw(f1):
-        plot_history(f1, tmp_path / "p.png")
-        fig = figures[-1]
+        fig = history_figure(f1)
         fig.canvas.draw()
         return fig
     yield draw

@@ -131,22 +131,15 @@ def check_memory(cameras, frames: int, trials: int) -> None:
 PLOT_RANGE = (0.01, 0.99999)
 
 
-def plot_history(f1, path) -> None:
-    """F1 per trial and best so far, as a PNG written atomically."""
-    from testbed.output import save_figure
-
-    save_figure(history_figure(f1), path, dpi=100)
-
-
 def history_png(f1) -> bytes:
-    """The PNG of :func:`plot_history`, in memory."""
+    """F1 per trial and best so far (:func:`history_figure`) as PNG bytes."""
     from testbed.output import figure_png
 
     return figure_png(history_figure(f1), dpi=100)
 
 
 def history_figure(f1):
-    """The figure of :func:`plot_history`. F1 is drawn on a logit scale (0.9, 0.99, 0.999
+    """The figure of :func:`history_png`. F1 is drawn on a logit scale (0.9, 0.99, 0.999
     equally spaced): a search near F1 1 shows its gains (0.997 to 0.999 is a third of the
     errors), which a linear axis from the worst trial to 1 flattened into one line."""
     import matplotlib
