@@ -51,10 +51,24 @@ class TuneResult:
     f1: np.ndarray
 
 
-def suggest(trial) -> PipelineParams:
-    """Parameters drawn by an Optuna trial from :data:`SPACE`."""
+def searched_space(cameras) -> dict[str, tuple]:
+    """:data:`SPACE` for ``cameras``: ``column_threshold`` at most the rows of their rectified
+    columns (above it every scanline is empty, a file ``scanlines`` refuses).
+
+    >>> from scene import load_scene
+    >>> searched_space(load_scene("lab").cameras)["column_threshold"]
+    ('float', 1.0, 60.0)
+    """
+    from .rectify import level_cameras
+
+    kind, low, high = SPACE["column_threshold"]
+    return {**SPACE, "column_threshold": (kind, low, float(min(high, level_cameras(cameras)[1])))}
+
+
+def suggest(trial, space: dict | None = None) -> PipelineParams:
+    """Parameters drawn by an Optuna trial from ``space`` (default :data:`SPACE`)."""
     values = {}
-    for name, (kind, low, high, *step) in SPACE.items():
+    for name, (kind, low, high, *step) in (SPACE if space is None else space).items():
         if kind == "int":
             values[name] = trial.suggest_int(name, low, high, step=step[0])
         else:
@@ -79,6 +93,7 @@ def tune(cameras, background, frames, gt_scanlines, n_trials: int, seed: int = 0
     # a page on every Ctrl-C; the error itself is re-raised here either way
     optuna.logging.set_verbosity(optuna.logging.ERROR)
     base = Pipeline(cameras, start, background)   # maps and background serve every trial
+    space = searched_space(cameras)
     study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
     with warnings.catch_warnings():        # a start outside SPACE: see outside_space
         warnings.filterwarnings("ignore", message="Fixed parameter .* is out of range", category=UserWarning)
@@ -86,7 +101,7 @@ def tune(cameras, background, frames, gt_scanlines, n_trials: int, seed: int = 0
     f1s = []
 
     def objective(trial):
-        f1 = scanline_f1(base, frames, gt_scanlines, suggest(trial))
+        f1 = scanline_f1(base, frames, gt_scanlines, suggest(trial, space))
         f1s.append(f1)
         if progress is not None:
             progress(f1)

@@ -108,3 +108,30 @@ def test_a_column_threshold_above_the_rectified_column_is_refused_first(render_d
         camtask(["tune", str(render_dir), "--trials", "1", "--params", str(tmp_path / "p.yaml"),
                  "--out", str(tmp_path / "t.yaml")])
     assert not (tmp_path / "t.yaml").exists()
+
+
+def test_the_search_stays_below_the_rows_of_a_small_cameras_rectified_column(monkeypatch):
+    """SPACE searched column_threshold up to 60 pixels whatever the camera: a 64 x 40 camera's
+    rectified columns have 46 rows, so a trial above that emptied every scanline and, were it
+    the best, tune wrote a file scanlines refuses."""
+    import scene
+    from pipeline import PipelineParams
+    from pipeline.rectify import level_cameras
+
+    cams = [scene.Camera.from_pose(i + 1, [x, 0.05, 2.2], np.radians(90 + d), np.radians(15), 64, 40,
+                                   np.radians(49), [-0.18, 0.06, 0, 0, 0])
+            for i, (x, d) in enumerate([(1.5, -20), (5.0, 20)])]
+    rows = level_cameras(cams)[1]
+    assert rows < pipeline.tuning.SPACE["column_threshold"][2]
+    bg, frames, _ = synthetic_sequence(cams, 2, np.random.default_rng(0))
+    gt = np.zeros((2, 2, 64), bool)                 # the search space, not the F1, is under test
+    tried = []
+    real = pipeline.tuning.scanline_f1
+
+    def scanline_f1(base, frames, gt, params):
+        tried.append(params.column_threshold)
+        return real(base, frames, gt, params)
+
+    monkeypatch.setattr(pipeline.tuning, "scanline_f1", scanline_f1)
+    pipeline.tuning.tune(cams, bg, frames, gt, 25, seed=0, start=PipelineParams(column_threshold=20.0))
+    assert len(tried) == 25 and max(tried) <= rows
