@@ -135,3 +135,17 @@ def test_the_search_stays_below_the_rows_of_a_small_cameras_rectified_column(mon
     monkeypatch.setattr(pipeline.tuning, "scanline_f1", scanline_f1)
     pipeline.tuning.tune(cams, bg, frames, gt, 25, seed=0, start=PipelineParams(column_threshold=20.0))
     assert len(tried) == 25 and max(tried) <= rows
+
+
+def test_frames_with_nobody_in_view_are_warned_of(tmp_path, capsys):
+    """With no occupied true column, F1 is 1 for parameters that detect nothing and 0 for any
+    false positive: tune silently favoured parameters that never detect anyone."""
+    cams = small_cameras()
+    bg, images, labels = synthetic_sequence(cams, 2, np.random.default_rng(1))
+    write_render_dir(tmp_path / "empty", cams, bg, bg[None].repeat(2, axis=0), np.zeros_like(labels))
+    write_render_dir(tmp_path / "people", cams, bg, images, labels)
+    warning = "warning: nobody is in view in the 2 frames tuned on"
+    for name, warned in (("empty", True), ("people", False)):
+        capsys.readouterr()
+        camtask(["tune", str(tmp_path / name), "--trials", "2", "--out", str(tmp_path / f"{name}.yaml")])
+        assert (warning in capsys.readouterr().err) == warned, name

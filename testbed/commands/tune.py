@@ -81,6 +81,10 @@ def run(args) -> int:
             gt.append(pipe.ground_truth(render.labels(i))[1])
             bar.update()
     gt = np.stack(gt)
+    if not gt.any():
+        print(f"warning: nobody is in view in the {n} frame{'s' * (n != 1)} tuned on (no column of a true scanline "
+              "is occupied): F1 is 1 only where nothing is detected, so the search favours parameters that "
+              "detect nothing; tune on frames with people in view (--frames, or another render)", file=sys.stderr)
     with tqdm(total=args.trials, desc="tune", unit="trial", file=sys.stderr, disable=args.json) as bar:
         best = [0.0]
 
