@@ -45,9 +45,16 @@ def digest(data, algorithm: str = ALGORITHM) -> str:
 
 
 def file_digest(path: str | os.PathLike, algorithm: str = ALGORITHM) -> str:
-    """Hex digest of the file at ``path``, read in 1 MiB blocks."""
+    """Hex digest of the file at ``path``, read in 1 MiB blocks.
+
+    A file that cannot be opened or read is an OSError of the same kind naming it
+    (``cannot read PATH: Input/output error``: a failing disk's EIO names no file).
+    """
     h = _hasher(algorithm)
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
+    try:
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+    except OSError as exc:
+        raise type(exc)(f"cannot read {path}: {exc.strerror or exc}") from None
     return h.hexdigest()

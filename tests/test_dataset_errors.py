@@ -465,6 +465,29 @@ def test_verify_names_links_to_nowhere_loops_and_fifos_without_reading_them(tmp_
                                                  "extra": ["fifo", "gone", "masks/loop"]}
 
 
+@pytest.mark.skipif(not os.path.exists("/proc/self/mem"), reason="needs Linux's /proc/self/mem")
+def test_verify_names_a_file_it_cannot_read(tmp_path, capsys):
+    """A read error (EIO from a failing disk) stopped verify with `[Errno 5] Input/output
+    error`, naming no file."""
+    import json
+
+    from testbed.episodes import checksums
+
+    ep = tmp_path / "episode_0000"
+    ep.mkdir()
+    (ep / "people.csv").write_text("frame\n")
+    files = checksums(ep) | {"scanlines.npz": "0" * 64}
+    (ep / "scanlines.npz").symlink_to("/proc/self/mem")     # opens; reading it at 0 is EIO
+    entry = {"index": 0, "name": ep.name, "seed": 0, "spawn_key": [0], "frames": 1, "files": files}
+    (tmp_path / "manifest.json").write_text(json.dumps({"format_version": 2, "episode_layout": 3,
+                                                        "checksum": "blake3", "episodes_planned": 1,
+                                                        "episodes": [entry]}))
+    capsys.readouterr()
+    assert main(["verify", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err == f"camtask verify: error: cannot read {ep / 'scanlines.npz'}: Input/output error"
+
+
 def test_episode_config_refuses_an_unknown_format():
     """fmt is checked when the config is made: render_episode knows only png and video."""
     from testbed.episodes import FORMATS, EpisodeConfig

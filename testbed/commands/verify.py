@@ -6,8 +6,8 @@ each episode with a problem: files changed, missing, or present but not listed. 
 or temporary folders the manifest does not list (a run stopped before it listed them)
 and episodes planned but not yet rendered are reported without failing.
 
-Exit code 0 when every listed episode is intact, 1 when one is not, 2 when DIR has no
-readable manifest.
+Exit code 0 when every listed episode is intact, 1 when one is not or a file cannot be
+read (one line naming it), 2 when DIR has no readable manifest.
 """
 
 from __future__ import annotations
