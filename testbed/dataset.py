@@ -106,10 +106,27 @@ def read_meta(episode: str | os.PathLike, complete: bool = True) -> dict:
     return meta
 
 
+#: people.csv's columns and their types: frame and person id, then metres (world frame).
+PEOPLE_DTYPE = np.dtype([("frame", int), ("person_id", int), ("x", float), ("y", float),
+                         ("radius", float), ("height", float)])
+
+
 def read_people(path: str | os.PathLike) -> np.ndarray:
-    """people.csv as a structured array (frame, person_id, x, y, radius, height); a
-    one-line ValueError naming the file when it cannot be parsed."""
+    """people.csv as a 1-D structured array of :data:`PEOPLE_DTYPE` (frame, person_id, x, y,
+    radius, height), one row per person and frame: also for a single row or none. A file
+    that cannot be parsed or lacks a column is a one-line ValueError naming it."""
     try:
-        return np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8")
+        table = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8", ndmin=1)
     except ValueError as exc:               # "Some errors were detected !\n    Line #2 (got 4 columns ...)"
         raise ValueError(f"{path}: cannot read ({' '.join(str(exc).split())})") from None
+    found = table.dtype.names or ()
+    for name in PEOPLE_DTYPE.names:
+        if name not in found:
+            raise ValueError(f"{path}: no column {name!r} (expected the header {','.join(PEOPLE_DTYPE.names)})")
+    people = np.empty(len(table), PEOPLE_DTYPE)
+    for name in PEOPLE_DTYPE.names:
+        try:
+            people[name] = table[name]
+        except (ValueError, TypeError):     # a word among the numbers
+            raise ValueError(f"{path}: column {name!r}: expected numbers, got text") from None
+    return people
