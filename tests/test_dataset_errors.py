@@ -1,6 +1,7 @@
 """camtask render: bad input gives one line and exit code 2 before any work starts."""
 
 import os
+import shutil
 
 import pytest
 
@@ -486,6 +487,31 @@ def test_verify_names_a_file_it_cannot_read(tmp_path, capsys):
     assert main(["verify", str(tmp_path)]) == 1
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert err == f"camtask verify: error: cannot read {ep / 'scanlines.npz'}: Input/output error"
+
+
+def test_verify_says_an_episode_that_is_a_file_is_not_a_folder(tmp_path, capsys):
+    """A file where an episode's folder should be was called `folder missing`."""
+    import json
+
+    from testbed.episodes import checksums
+
+    for n in (0, 1):
+        ep = tmp_path / f"episode_{n:04d}"
+        ep.mkdir()
+        (ep / "people.csv").write_text("frame\n")
+    entries = [{"index": n, "name": f"episode_{n:04d}", "seed": 0, "spawn_key": [n], "frames": 1,
+                "files": checksums(tmp_path / f"episode_{n:04d}")} for n in (0, 1)]
+    (tmp_path / "manifest.json").write_text(json.dumps({"format_version": 2, "episode_layout": 3,
+                                                        "checksum": "blake3", "episodes_planned": 2,
+                                                        "episodes": entries}))
+    shutil.rmtree(tmp_path / "episode_0000")
+    shutil.rmtree(tmp_path / "episode_0001")
+    (tmp_path / "episode_0001").write_text("not an episode")
+    capsys.readouterr()
+    assert main(["verify", str(tmp_path)]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert "episode_0000: folder missing (1 file listed)" in lines
+    assert "episode_0001: a file, not a folder (1 file listed)" in lines
 
 
 def test_episode_config_refuses_an_unknown_format():

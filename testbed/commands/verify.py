@@ -58,9 +58,8 @@ def run(args) -> int:
             problems = episode_problems(root, entry, algorithm)
             if any(problems.values()):
                 bad.append(entry["name"])
-                n = len(entry["files"])
-                text = problems_text(problems) if (root / entry["name"]).is_dir() else \
-                    f"folder missing ({n} file{'' if n == 1 else 's'} listed)"
+                folder = root / entry["name"]
+                text = problems_text(problems) if folder.is_dir() else f"{absent(folder)} ({file_count(entry)} listed)"
                 if "meta.json" in problems["changed"]:
                     text += origin(root, entry)
                 tqdm.write(f"{entry['name']}: {text}", file=sys.stdout)
@@ -76,6 +75,22 @@ def run(args) -> int:
         return 1
     print(f"{root}: {len(entries)} episode{'' if len(entries) == 1 else 's'} intact ({files} files, {algorithm})")
     return 0
+
+
+def absent(folder: Path) -> str:
+    """Why an episode's ``folder`` holds none of its files: ``folder missing``, or what is
+    there instead."""
+    if folder.is_symlink() and not folder.exists():
+        return "a link to nowhere, not a folder"
+    if folder.exists():
+        return f"a {'file' if folder.is_file() else 'special file'}, not a folder"
+    return "folder missing"
+
+
+def file_count(entry: dict) -> str:
+    """``1 file`` or ``229 files``: how many files the manifest lists for ``entry``."""
+    n = len(entry["files"])
+    return f"{n} file{'' if n == 1 else 's'}"
 
 
 def origin(root: Path, entry: dict) -> str:
