@@ -356,10 +356,24 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
                 if verified is not None:
                     verified(len(entry["files"]), total)
         remove_unlisted(out, keep)
+        check_episode_names_free(out, keep, episodes)
     listing = ManifestWriter(out, config, episodes, keep)
     if not listing.on_disk():               # a finished run resumed on a full disk: nothing to write
         listing.flush()
     return keep
+
+
+def check_episode_names_free(out: Path, keep: dict[int, dict], episodes: int) -> None:
+    """Refuse (FileExistsError, before any work) a file or link of ``out`` named as an
+    episode still to render: a run makes only folders there, so it is not removed as left
+    behind (:func:`unlisted`), and the finished episode could not be renamed onto it."""
+    for i in range(episodes):
+        path = Path(out) / episode_name(i)
+        if i not in keep and os.path.lexists(path):
+            kind = "a link" if path.is_symlink() else "a folder that could not be deleted" if path.is_dir() \
+                else "a file"
+            raise FileExistsError(f"--resume: {path} is {kind}, not an episode folder, and episode {i} is to be "
+                                  "written there: move it away")
 
 
 @contextlib.contextmanager

@@ -514,6 +514,30 @@ def test_verify_says_an_episode_that_is_a_file_is_not_a_folder(tmp_path, capsys)
     assert "episode_0001: a file, not a folder (1 file listed)" in lines
 
 
+@pytest.mark.parametrize("kind", ["a file", "a link"])
+def test_resume_refuses_a_file_where_an_episode_is_to_be_written(tmp_path, capsys, kind):
+    """A file or link named episode_0001 (not a run's: kept) made --resume render, fail to
+    rename the episode into place with `[Errno 20] Not a directory: PosixPath(...)`, and
+    say that --resume finishes the run, which failed again."""
+    out = tmp_path / "ds"
+    argv = ["lab", "--episodes", "2", "--frames", "1", "--cameras", "2", "--workers", "0", "--out", str(out)]
+    assert run(capsys, *argv)[0] == 0
+    shutil.rmtree(out / "episode_0001")
+    if kind == "a file":
+        (out / "episode_0001").write_text("mine")
+    else:
+        (out / "episode_0001").symlink_to(tmp_path / "elsewhere")
+    kept = (out / "episode_0000" / "meta.json").stat().st_mtime_ns
+    code, line = run(capsys, *argv, "--resume")
+    assert code == 2, line
+    assert line == (f"camtask render: error: --resume: {out / 'episode_0001'} is {kind}, not an episode folder, "
+                    "and episode 1 is to be written there: move it away")
+    assert (out / "episode_0000" / "meta.json").stat().st_mtime_ns == kept
+    assert os.path.lexists(out / "episode_0001") and not (out / "episode_0001").is_dir()
+    (out / "episode_0001").unlink()
+    assert run(capsys, *argv, "--resume")[0] == 0 and main(["verify", str(out)]) == 0
+
+
 def test_episode_config_refuses_an_unknown_format():
     """fmt is checked when the config is made: render_episode knows only png and video."""
     from testbed.episodes import FORMATS, EpisodeConfig
