@@ -320,7 +320,12 @@ class UnionAreas:
         keep = t1 > t0
         camera, apex, t0, t1 = camera[keep], apex[keep], t0[keep], t1[keep]
         self.n = n
-        ring = _shrunk_ring(np.ascontiguousarray(room_xy, dtype=float))
+        # coordinates about the room's centre: Green's integrand x dy - y dx of coordinates
+        # far from the origin (a georeferenced room) cancels, and the shrink drowns in them
+        room_xy = np.asarray(room_xy, dtype=float)
+        origin = 0.5 * (room_xy.min(axis=0) + room_xy.max(axis=0))
+        apex = apex - origin
+        ring = _shrunk_ring(np.ascontiguousarray(room_xy - origin))
         self._ring, E = ring, ring.E
         q = camera.size
         # cameras: inside the shrunk room, or outside with a near chain of visible edges

@@ -1,6 +1,7 @@
 """Triangle-fan cone areas agree with polygon overlays."""
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import MultiPoint, Point, box
@@ -105,3 +106,25 @@ def test_union_areas_rays_along_the_walls_count_once():
     got = UnionAreas(convex_ring(room), cones, 6, 20.0)(sets)
     want = _union_reference(room, cones, sets, 20.0)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("offset", [(-3e3, 2e3), (5e5, 4e6)])
+def test_union_areas_do_not_depend_on_where_the_origin_is(offset):
+    # a room in georeferenced coordinates (metres east and north, UTM-like): Green's
+    # integrand x dy - y dx of such coordinates cancels to ~1e-3 m^2, and a shrink of
+    # 1e-12 of the room's size is below their rounding
+    from shapely import affinity
+
+    from tasking.fan import UnionAreas, convex_ring
+
+    rng = np.random.default_rng(7)
+    room = box(0, 0, 6.7056, 5.7912)
+    apex = np.r_[[[1.0, 0.0], [3.0, 5.7912], [0.0, 2.0], [6.7056, 0.0]], rng.uniform(-1, 7, (5, 2))]
+    t0 = np.r_[0.0, np.pi, -np.pi / 2, np.pi / 2, rng.uniform(-np.pi, np.pi, 5)]
+    t1 = t0 + np.r_[0.5, np.pi, 0.3, np.pi / 2, rng.uniform(0.1, 0.6, 5)]
+    cones = (np.arange(9), apex, t0, t1)
+    sets = rng.random((12, 9)) < 0.3
+    want = UnionAreas(convex_ring(room), cones, 9, 40.0)(sets)
+    moved = (np.arange(9), apex + offset, t0, t1)
+    got = UnionAreas(convex_ring(affinity.translate(room, *offset)), moved, 9, 40.0)(sets)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * room.area)
