@@ -345,7 +345,8 @@ def polygon_centres(polygons) -> np.ndarray:
 
     Parameters
     ----------
-    polygons : sequence of p shapely Polygons
+    polygons : sequence of p shapely Polygons (:func:`prune_small`'s); a MultiPolygon,
+        whose centroid can lie between its parts, or any other geometry is refused
 
     Returns
     -------
@@ -356,7 +357,14 @@ def polygon_centres(polygons) -> np.ndarray:
     >>> polygon_centres([box(0, 0, 2, 2), Polygon()]).tolist()
     [[1.0, 1.0], [nan, nan]]
     """
+    if isinstance(polygons, BaseGeometry):
+        raise ValueError(f"polygons: expected a sequence of Polygons, got one {polygons.geom_type} "
+                         "(prune_small(hull, min_area) gives a hull's polygons)")
     polys = np.asarray(list(polygons), dtype=object)
+    for i, p in enumerate(polys):
+        if not isinstance(p, Polygon):
+            raise ValueError(f"polygons[{i}] is a {getattr(p, 'geom_type', type(p).__name__)}, not a Polygon "
+                             "(prune_small(hull, min_area) gives a hull's polygons)")
     if polys.size == 0:
         return np.empty((0, 2))
     centres = shapely.centroid(polys)

@@ -343,3 +343,20 @@ def test_free_wedges_never_meet_an_object_whatever_its_bearing(yaw, fov, rel):
     for c in centres:
         disc = Point(c).buffer(R * (1 - 1e-9), quad_segs=32)    # inscribed polygon, just inside
         assert wedges[0].intersection(disc).area < 1e-12
+
+
+def test_polygon_centres_refuses_what_is_not_a_polygon():
+    """A multi-part polygon's centroid lies between its parts (two objects' hull gave one
+    centre in neither); a single geometry is not a sequence of polygons."""
+    from shapely.geometry import MultiPolygon
+
+    two = MultiPolygon([box(0, 0, 1, 1), box(2, 0, 3, 1)])
+    with pytest.raises(ValueError, match=r"polygons\[1\] is a MultiPolygon, not a Polygon.*prune_small"):
+        polygon_centres([box(0, 0, 1, 1), two])
+    with pytest.raises(ValueError, match=r"polygons\[0\] is a LineString"):
+        polygon_centres([LineString([(0, 0), (1, 1)])])
+    with pytest.raises(ValueError, match=r"polygons: expected a sequence of Polygons, got one MultiPolygon.*prune_small"):
+        polygon_centres(two)
+    with pytest.raises(ValueError, match="polygons: expected a sequence of Polygons, got one Polygon"):
+        polygon_centres(box(0, 0, 1, 1))
+    np.testing.assert_array_equal(polygon_centres(prune_small(two, 0.0)), [[0.5, 0.5], [2.5, 0.5]])
