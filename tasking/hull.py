@@ -43,6 +43,9 @@ SLIVER = 1e-12
 SEQUENTIAL_MAX = 32
 #: Snap-rounding grid of the hull's overlays, relative to the room's size (:func:`overlay_grid`).
 GRID = 1e-13
+#: ... and at least this fraction of the largest coordinate of the overlaid geometries
+#: (45 times a double's rounding, which a finer grid cannot snap to).
+COORD_GRID = 1e-14
 
 __all__ = [
     "SLIVER",
@@ -204,7 +207,7 @@ def hull_from_wedges(wedges, room: Polygon, subset=None) -> BaseGeometry:
         w = w[np.asarray(subset, dtype=np.intp)]
     if w.size == 0:
         return room
-    grid = overlay_grid(room)
+    grid = overlay_grid(room, w)
     if w.size > SEQUENTIAL_MAX:
         return drop_slivers(shapely.difference(room, shapely.union_all(w, grid_size=grid), grid_size=grid), room)
     hull = room
@@ -214,8 +217,9 @@ def hull_from_wedges(wedges, room: Polygon, subset=None) -> BaseGeometry:
     return hull
 
 
-def overlay_grid(room: Polygon) -> float:
-    """The precision grid (metres) of the hull's overlays: ``GRID`` times the room's size.
+def overlay_grid(room: Polygon, geoms=()) -> float:
+    """The precision grid (metres) of the hull's overlays: ``GRID`` times the room's size,
+    at least ``COORD_GRID`` times the largest coordinate of ``room`` and ``geoms``.
 
     GEOS's floating overlays can misjudge a polygon edge that runs along a wedge's edge
     (wedges of cameras whose fields of view line up along a wall or a diagonal): three
@@ -224,9 +228,17 @@ def overlay_grid(room: Polygon) -> float:
     below any length that matters (``grid_size``) makes these overlays robust, at about
     1.5-2 times the cost. The taskers' own overlays stay floating: their hulls only rank
     candidate cameras.
+
+    A grid below the coordinates' own rounding snaps nothing: with a room millions of
+    metres from the origin (georeferenced), or wedges a kilometre long from cameras far
+    from a small room, GEOS stopped with 'TopologyException: side location conflict'.
+    Hence the floor ``COORD_GRID`` times the largest coordinate (wedges included); for
+    the lab and the circle the room's size decides.
     """
     x0, y0, x1, y1 = room.bounds
-    return GRID * max(x1 - x0, y1 - y0)
+    bounds = shapely.bounds(np.asarray(geoms, dtype=object).ravel())
+    reach = max(abs(x0), abs(y0), abs(x1), abs(y1), float(np.nanmax(np.abs(bounds), initial=0.0)))
+    return max(GRID * max(x1 - x0, y1 - y0), COORD_GRID * reach)
 
 
 def drop_slivers(geom: BaseGeometry, room: Polygon) -> BaseGeometry:

@@ -360,3 +360,24 @@ def test_polygon_centres_refuses_what_is_not_a_polygon():
     with pytest.raises(ValueError, match="polygons: expected a sequence of Polygons, got one Polygon"):
         polygon_centres(box(0, 0, 1, 1))
     np.testing.assert_array_equal(polygon_centres(prune_small(two, 0.0)), [[0.5, 0.5], [2.5, 0.5]])
+
+
+@pytest.mark.parametrize("offset, xy, yaw, fov", [
+    # a georeferenced room (metres east, north) with two cameras in it
+    ((5e5, 4e6), [[0.4, 1.8], [3.2, 1.8]], [1.3, -1.8], np.pi),
+    # four cameras a kilometre away from a 4 x 3 m room and one on its wall
+    ((0.0, 0.0), [[998.0, 91.0], [-199.0, -978.0], [-799.0, 600.0], [-998.0, 13.0], [4.9, 1.1]],
+     [-1.8, 2.6, -1.8, 0.4, 0.6], 6.28),
+])
+def test_hull_overlays_hold_for_coordinates_large_against_the_room(offset, xy, yaw, fov):
+    """The snap-rounding grid is 1e-13 of the room's size: below the rounding of
+    coordinates millions of metres from the origin, or of wedges a kilometre long, GEOS's
+    overlay stopped with 'TopologyException: side location conflict'."""
+    from shapely import affinity
+
+    room, centre = box(0, 0, 4, 3), np.array([[2.0, 1.5]])
+    hull = visual_hull_of_discs(np.add(xy, offset), yaw, fov, centre + offset, 0.3, affinity.translate(room, *offset))
+    hull = affinity.translate(hull, -offset[0], -offset[1])
+    assert Point(2.0, 1.5).buffer(0.3 * (1 - 1e-9), quad_segs=32).difference(hull).area < 1e-9
+    if any(offset):
+        assert sym_diff_area(hull, visual_hull_of_discs(xy, yaw, fov, centre, 0.3, room)) < 1e-6
