@@ -123,9 +123,10 @@ def main(argv=None) -> int:
     from testbed.episodes import EpisodeConfig
     from testbed.parallel import open_client
 
+    for name in ("frames", "episodes", "repeat"):
+        if getattr(args, name) < 1:
+            p.error(f"--{name}: expected an integer >= 1, got {getattr(args, name)}")
     config = EpisodeConfig("lab", None, None, args.frames, 0, args.format, load_params().to_dict())
-    if args.repeat < 1:
-        p.error(f"--repeat: expected an integer >= 1, got {args.repeat}")
     root = Path(tempfile.mkdtemp(prefix="bench-dataset."))
     runs: dict[str, list] = {"render": [], "1": [], "2": []}
     try:

@@ -31,14 +31,20 @@ def main(argv=None) -> int:
     p.add_argument("--k", type=int, default=6)
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
+    if args.frames < 1:
+        p.error(f"--frames: expected an integer >= 1, got {args.frames}")
 
     scene = load_scene("lab")
+    try:
+        config = LoopConfig("incremental", args.k, m=1).check(len(scene.cameras))
+    except ValueError as exc:
+        p.error(f"--{exc}")
     motion, sensor = np.random.default_rng(0).spawn(2)
     truth = walk(scene, args.frames + 5, motion)
     source = LiveSource(scene, None, sensor)
     central = defaultdict(float)
     try:
-        loop = run_loop(scene, LoopConfig("incremental", args.k, m=1), truth, source, seconds=central)
+        loop = run_loop(scene, config, truth, source, seconds=central)
         for _ in range(5):                       # warm-up: GL buffers, first greedy
             next(loop)
         source.seconds.clear()

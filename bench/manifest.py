@@ -40,6 +40,11 @@ def main(argv=None) -> int:
                    help="seconds of run between finished episodes (default 6: 2 workers, ~25 frames/s)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     args = p.parse_args(argv)
+    for name in ("episodes", "frames"):
+        if getattr(args, name) < 1:
+            p.error(f"--{name}: expected an integer >= 1, got {getattr(args, name)}")
+    if not args.every >= 0 or args.every == float("inf"):
+        p.error(f"--every: expected a number of seconds >= 0, got {args.every}")
 
     from testbed.episodes import EpisodeConfig
     from testbed.generate import MANIFEST, ManifestWriter, manifest, write_json_atomic

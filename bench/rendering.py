@@ -15,8 +15,9 @@ people_ms: what the production step does in OpenGL: the room's colour + depth co
            into each camera's people rectangle, the people's triangles drawn, the
            rectangles read back (``Renderer._draw_people``; no room triangles);
            a part of step_ms
-Figures are medians over ``--steps`` steps after two warm-up steps, measured in three
-interleaved rounds; ``ratios`` are the three rounds' step/floor ratios (their spread).
+Figures are medians over three interleaved rounds of ``--steps // 3`` steps (at least 3),
+each after two warm-up steps; ``ratios`` are the three rounds' step/floor ratios (their
+spread).
 """
 
 from __future__ import annotations
@@ -54,6 +55,8 @@ def main(argv=None) -> int:
     p.add_argument("--steps", type=int, default=10)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     args = p.parse_args(argv)
+    if args.steps < 3:
+        p.error(f"--steps: expected an integer >= 3 (three rounds of steps // 3), got {args.steps}")
 
     from render import Renderer
     from render.renderer import _boxes

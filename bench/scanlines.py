@@ -59,8 +59,14 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
+    for name in ("frames", "repeat"):
+        if getattr(args, name) < 1:
+            ap.error(f"--{name}: expected an integer >= 1, got {getattr(args, name)}")
     cv2.setNumThreads(1)
-    cams, bg, frames = load_data(args)
+    try:
+        cams, bg, frames = load_data(args)
+    except (ValueError, OSError) as exc:        # not a render directory, a frame that cannot be read
+        ap.error(f"--dir: {exc}")
     params = load_params()
     model = background_model(bg)
     n = frames.shape[0] * frames.shape[1]

@@ -56,6 +56,8 @@ def main() -> None:
     p.add_argument("--study", type=int, default=0, metavar="TRIALS",
                    help="also time `camtask study cameras --trials TRIALS` with 1 and 2 workers")
     a = p.parse_args()
+    if a.study < 0:
+        p.error(f"--study: expected a number of trials >= 0 (0: no study), got {a.study}")
     for objects, seed in ((5, 0), (10, 0)):
         bench_limit(objects, seed)
     if a.study:

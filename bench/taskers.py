@@ -141,6 +141,8 @@ def main(argv=None) -> None:
     ap.add_argument("--repeat", type=int, default=5, help="timed repeats (median)")
     ap.add_argument("--seed", type=int, default=0, help="seed of the object drop")
     ns = ap.parse_args(argv)
+    if ns.repeat < 1:
+        ap.error(f"--repeat: expected an integer >= 1, got {ns.repeat}")
     res = run(ns.repeat, ns.seed)
     if ns.json:
         print(json.dumps(res))
