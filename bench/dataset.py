@@ -61,11 +61,20 @@ def render_only(config, frames: int) -> float:
     return frames / (time.perf_counter() - t)
 
 
-def warm_up(config) -> None:
-    """One episode in this worker (renderer, maps, pipeline), written to a scratch folder."""
+def results(client, futures: list) -> list:
+    """The futures' results, waited for by polling: a Ctrl-C in ``client.gather`` left Dask
+    tasks that printed "Task exception was never retrieved ... AllExit" tracebacks."""
+    while not all(f.done() for f in futures):
+        time.sleep(0.02)
+    return client.gather(futures)
+
+
+def warm_up(config, root: str) -> None:
+    """One episode in this worker (renderer, maps, pipeline), written to a scratch folder in
+    ``root`` (the bench's own, removed at the end even if the worker is stopped mid-episode)."""
     from testbed.episodes import render_episode
 
-    scratch = tempfile.mkdtemp(prefix="bench-warm.")
+    scratch = tempfile.mkdtemp(prefix="bench-warm.", dir=root)
     try:
         render_episode(config, 0, scratch)
     finally:
@@ -76,10 +85,11 @@ def generation_fps(client, config, episodes: int, workers: int, root: Path) -> t
     """(frames per second, ms per frame of each stage summed over the workers, busy fraction)."""
     from testbed.generate import generate
 
-    client.gather([client.submit(warm_up, config, workers=[w], pure=False)   # every worker once
-                   for w in client.scheduler_info()["workers"]])
+    root.mkdir(parents=True, exist_ok=True)
+    results(client, [client.submit(warm_up, config, str(root), workers=[w], pure=False)   # every worker once
+                     for w in client.scheduler_info()["workers"]])
     out = root / f"timed{workers}"
-    out.mkdir(parents=True)
+    out.mkdir()
     t = time.perf_counter()
     generate(config, episodes, out, {}, client)
     wall = time.perf_counter() - t
@@ -132,7 +142,7 @@ def main(argv=None) -> int:
     try:
         for r in range(args.repeat):
             with open_client(1) as client:
-                runs["render"].append(client.submit(render_only, config, 2 * args.frames, pure=False).result())
+                runs["render"] += results(client, [client.submit(render_only, config, 2 * args.frames, pure=False)])
                 runs["1"].append(generation_fps(client, config, args.episodes, 1, root / f"r{r}"))
             with open_client(2) as client:
                 runs["2"].append(generation_fps(client, config, 2 * args.episodes, 2, root / f"r{r}"))
@@ -171,4 +181,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from testbed.stops import run_main
+
+    sys.exit(run_main(main, Path(__file__).name))

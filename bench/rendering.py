@@ -107,4 +107,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from testbed.stops import run_main
+
+    sys.exit(run_main(main, Path(__file__).name))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -19,6 +20,8 @@ import numpy as np
 
 ROOT = str(Path(__file__).resolve().parent.parent)
 sys.path.insert(0, ROOT)                                            # this checkout's packages first
+
+from testbed.stops import Terminated
 
 
 def bench_limit(objects: int, seed: int) -> None:
@@ -47,8 +50,29 @@ def bench_study(trials: int, workers: int) -> float:
             "--workers", str(workers), "--json", "--no-progress"]
     t = time.perf_counter()
     env = os.environ | {"PYTHONPATH": os.pathsep.join(filter(None, (ROOT, os.environ.get("PYTHONPATH"))))}
-    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, env=env)    # this checkout's camtask
+    with subprocess.Popen(argv, stdout=subprocess.DEVNULL, env=env) as study:    # this checkout's camtask
+        try:
+            code = study.wait()
+        except KeyboardInterrupt as stop:
+            stop_child(study, signal.SIGTERM if isinstance(stop, Terminated) else signal.SIGINT)
+            raise
+    if code:     # camtask has said why on stderr
+        sys.exit(f"{Path(__file__).name}: camtask study cameras --trials {trials} --workers {workers} "
+                 f"exited with status {code}")
     return time.perf_counter() - t
+
+
+def stop_child(child: subprocess.Popen, signum: int) -> None:
+    """Let ``child`` stop as camtask does on Ctrl-C (its Dask cluster closed): it has the signal
+    too when it came from the terminal; if not, it is sent on after a second; killed after 60 s."""
+    try:
+        child.wait(timeout=1)
+    except subprocess.TimeoutExpired:
+        child.send_signal(signum)
+        try:
+            child.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            child.kill()
 
 
 def main() -> None:
@@ -66,4 +90,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from testbed.stops import run_main
+
+    sys.exit(run_main(main, Path(__file__).name))

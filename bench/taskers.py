@@ -160,4 +160,6 @@ def main(argv=None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from testbed.stops import run_main
+
+    sys.exit(run_main(main, Path(__file__).name))

@@ -70,3 +70,16 @@ def handled() -> Iterator[None]:
         for s, handler in previous.items():
             signal.signal(s, signal.SIG_DFL if handler is None else handler)
         _came.clear()
+
+
+def run_main(main, prog: str) -> int:
+    """Exit status of a script's ``main()`` run under :func:`handled`: a Ctrl-C or SIGTERM
+    ends it with one line on stderr, "PROG: interrupted" (130) or "PROG: terminated" (143),
+    once its ``finally`` blocks have run (temporary folders removed), not a traceback."""
+    with handled():
+        try:
+            return int(main() or 0)
+        except KeyboardInterrupt as stop:
+            terminated = isinstance(stop, Terminated)
+            print(f"{prog}: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+            return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
