@@ -5,8 +5,9 @@
 One OpenCV thread (cv2.setNumThreads(1)). Both implementations process the same frames
 of all 16 lab cameras (a render directory, or synthetic lab frames) from the same
 background model; the scanlines must be identical. Times are the best of ``--repeat``
-passes over the sequence, divided by frames x cameras: wall clock (``*_ms``) and CPU time
-of this process (``*_cpu_ms``, less sensitive to other load on the machine).
+passes over the sequence for production and of ``max(1, --repeat // 2)`` for the much
+slower reference, divided by frames x cameras: wall clock (``*_ms``) and CPU time of this
+process (``*_cpu_ms``, less sensitive to other load on the machine).
 """
 
 from __future__ import annotations
