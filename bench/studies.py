@@ -3,7 +3,8 @@
     .venv/bin/python bench/studies.py            # limit: 2000-camera hull vs exact
     .venv/bin/python bench/studies.py --study 50 # also the cameras study, 1 and 2 workers
 
-Prints wall times; numbers for docs/performance.md (## Studies).
+Prints wall times and their ratios, measured in this one run: the exact limit against the
+2000-camera hull, 2 workers against 1; numbers for docs/performance.md (## Studies).
 """
 
 from __future__ import annotations
@@ -40,7 +41,8 @@ def bench_limit(objects: int, seed: int) -> None:
     h_raw, h_pruned, _ = core.hull_residual(xy, yaw, centers, 0.1, room)
     t_hull = time.perf_counter() - t
     print(f"{objects} objects, seed {seed}: exact limit {raw / obj:.4f} raw / {pruned / obj:.4f} pruned "
-          f"in {t_exact:.3f} s; 2000 cameras {h_raw:.4f} raw / {h_pruned:.4f} pruned in {t_hull:.2f} s")
+          f"in {t_exact:.3f} s; 2000 cameras {h_raw:.4f} raw / {h_pruned:.4f} pruned in {t_hull:.2f} s "
+          f"(the exact limit {t_hull / t_exact:.1f}x faster)")
 
 
 def bench_study(trials: int, workers: int) -> float:
@@ -76,7 +78,7 @@ def stop_child(child: subprocess.Popen, signum: int) -> None:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__)
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--study", type=int, default=0, metavar="TRIALS",
                    help="also time `camtask study cameras --trials TRIALS` with 1 and 2 workers")
     a = p.parse_args()
@@ -85,8 +87,11 @@ def main() -> None:
     for objects, seed in ((5, 0), (10, 0)):
         bench_limit(objects, seed)
     if a.study:
+        seconds = {}
         for w in (1, 2):
-            print(f"cameras study, {a.study} trials, {w} worker(s): {bench_study(a.study, w):.1f} s")
+            seconds[w] = bench_study(a.study, w)
+            print(f"cameras study, {a.study} trials, {w} worker(s): {seconds[w]:.1f} s")
+        print(f"cameras study, {a.study} trials: 2 workers {seconds[1] / seconds[2]:.2f}x one")
 
 
 if __name__ == "__main__":
