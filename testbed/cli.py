@@ -17,7 +17,6 @@ import signal
 import sys
 
 from testbed import stops
-from testbed.stops import Terminated
 
 #: Command modules, in the order ``camtask --help`` lists them.
 COMMANDS = (
@@ -62,19 +61,6 @@ def build_parser() -> argparse.ArgumentParser:
     for name in COMMANDS:
         importlib.import_module(name).add_parser(sub)
     return parser
-
-
-def _interruption(exc: BaseException) -> KeyboardInterrupt | None:
-    """The Ctrl-C or SIGTERM behind ``exc``, if any: a signal that lands while numba's
-    dispatcher calls back into Python (to unpickle a constant) comes out as ``SystemError:
-    CPUDispatcher(...) returned a result with an exception set``, caused by it."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None
 
 
 def _stdout_closed() -> bool:
@@ -127,11 +113,10 @@ def _dispatch(argv: list[str] | None) -> int:
         parser = build_parser()     # imports every command module: numpy, OpenCV, shapely
         args = parser.parse_args(argv)
     except BaseException as exc:    # Ctrl-C or SIGTERM in the first second: one line, no traceback
-        stop = _interruption(exc)   # (one in an extension module's import can come out chained)
-        if stop is None:
+        code = stops.report_stop(exc, _prog(argv))   # (one in an extension module's import can come out chained)
+        if code is None:
             raise
-        print(f"{_prog(argv)}: {'terminated' if isinstance(stop, Terminated) else 'interrupted'}", file=sys.stderr)
-        return 128 + signal.SIGTERM if isinstance(stop, Terminated) else 130
+        return code
     try:
         return int(args.func(args) or 0)
     except (ValueError, UsageError, FileNotFoundError, FileExistsError) as exc:
@@ -147,22 +132,14 @@ def _dispatch(argv: list[str] | None) -> int:
     except (OSError, RunError, BackendError) as exc:    # the machine, not the input: a full disk, no OpenGL
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 1
-    except SystemError as exc:
-        stop = _interruption(exc)
-        if stop is None:
-            raise
-        print(f"camtask {args.command}: {'terminated' if isinstance(stop, Terminated) else 'interrupted'}",
-              file=sys.stderr)
-        return 128 + signal.SIGTERM if isinstance(stop, Terminated) else 130
     except MemoryError as exc:              # NumPy's says how much it asked for ("Unable to allocate 45 GiB ...")
         print(f"camtask {args.command}: error: out of memory ({exc or 'no details'})", file=sys.stderr)
         return 1
-    except Terminated:
-        print(f"camtask {args.command}: terminated", file=sys.stderr)
-        return 128 + signal.SIGTERM
-    except KeyboardInterrupt:
-        print(f"camtask {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except (KeyboardInterrupt, SystemError) as exc:     # SystemError: a signal in numba's dispatcher
+        code = stops.report_stop(exc, f"camtask {args.command}")
+        if code is None:
+            raise
+        return code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -72,6 +72,31 @@ def handled() -> Iterator[None]:
         _came.clear()
 
 
+def interruption(exc: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM behind ``exc``, if any: a signal that lands while numba's
+    dispatcher calls back into Python (to unpickle a constant) comes out as ``SystemError:
+    CPUDispatcher(...) returned a result with an exception set``, caused by it."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def report_stop(exc: BaseException, prog: str) -> int | None:
+    """For an ``exc`` that is (or was caused by) a Ctrl-C or SIGTERM, print one line on
+    stderr, "PROG: interrupted" or "PROG: terminated", and return the exit status (130,
+    143); else None (the caller re-raises)."""
+    stop = interruption(exc)
+    if stop is None:
+        return None
+    terminated = isinstance(stop, Terminated)
+    print(f"{prog}: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+    return 128 + int(signal.SIGTERM if terminated else signal.SIGINT)
+
+
 def run_main(main, prog: str) -> int:
     """Exit status of a script's ``main()`` run under :func:`handled`: a Ctrl-C or SIGTERM
     ends it with one line on stderr, "PROG: interrupted" (130) or "PROG: terminated" (143),
@@ -79,7 +104,8 @@ def run_main(main, prog: str) -> int:
     with handled():
         try:
             return int(main() or 0)
-        except KeyboardInterrupt as stop:
-            terminated = isinstance(stop, Terminated)
-            print(f"{prog}: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
-            return 128 + (signal.SIGTERM if terminated else signal.SIGINT)
+        except (KeyboardInterrupt, SystemError) as exc:
+            code = report_stop(exc, prog)
+            if code is None:
+                raise
+            return code

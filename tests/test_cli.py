@@ -115,6 +115,7 @@ def test_ctrl_c_that_numba_turned_into_a_system_error_is_one_line(monkeypatch, c
     import pytest
 
     from testbed.commands import verify
+    from testbed.stops import Terminated
 
     def numba_interrupted(args):
         try:
@@ -128,7 +129,7 @@ def test_ctrl_c_that_numba_turned_into_a_system_error_is_one_line(monkeypatch, c
 
     def terminated(args):
         try:
-            raise cli.Terminated
+            raise Terminated
         except KeyboardInterrupt as exc:
             raise SystemError("returned a result with an exception set") from exc
 

@@ -59,3 +59,23 @@ def test_the_render_loop_checks(tmp_path, monkeypatch):
     finally:
         signal.signal(signal.SIGINT, before)
     assert code == 130
+
+
+def test_a_script_stopped_in_numbas_dispatcher_ends_in_one_line(capsys):
+    """run_main (the bench scripts' entry) caught KeyboardInterrupt alone: a Ctrl-C that numba's
+    dispatcher turned into "SystemError: CPUDispatcher(...) returned a result with an exception
+    set" (the pipeline's compiled kernels) ended in tracebacks, as camtask's commands once did."""
+    def numba_interrupted():
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("CPUDispatcher(<function angle_mask>) returned a result with an exception set") from exc
+
+    assert stops.run_main(numba_interrupted, "scanlines.py") == 130
+    assert capsys.readouterr().err == "scanlines.py: interrupted\n"
+
+    def broken():
+        raise SystemError("a real bug")
+
+    with pytest.raises(SystemError, match="a real bug"):
+        stops.run_main(broken, "scanlines.py")
