@@ -203,7 +203,8 @@ def scanline_views(bearings) -> tuple[np.ndarray, np.ndarray]:
     (n,) radians, the angle between those edges.
 
     bearings : n sequences of (W,) float, radians, each camera's column bearings, left to
-        right (decreasing). Not the optical axis and the pinhole's field of view: an
+        right (decreasing, as the pipeline's; increasing ones, of a hand-made source, are
+        read right to left). Not the optical axis and the pinhole's field of view: an
         off-centre principal point turns the view from the axis, a barrel lens widens it,
         and the pitch and the rectification narrow it (lab: 49.16 degrees, 0.21 off the
         axis).
@@ -215,6 +216,8 @@ def scanline_views(bearings) -> tuple[np.ndarray, np.ndarray]:
     yaw, fov = [], []
     for b in bearings:
         b = np.unwrap(np.asarray(b, float))
+        if b[-1] > b[0]:                                     # increasing: the same view, read from the right
+            b = b[::-1]
         left = b[0] + (b[0] - b[1]) / 2                     # columns are pixel centres: half one out
         right = b[-1] - (b[-2] - b[-1]) / 2
         yaw.append(float(np.angle(np.exp(0.5j * (left + right)))))

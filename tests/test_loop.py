@@ -477,3 +477,13 @@ def test_a_default_column_threshold_too_high_says_it_is_the_default(command, cap
         "error: --params (not given: the default assets/pipeline/default.yaml): column_threshold 55 exceeds the "
         "50 pixels of a rectified column; every scanline would be empty"), err
     assert not (tmp_path / "out").exists()
+
+
+def test_scanline_views_read_increasing_bearings_as_the_same_view():
+    """A source whose bearings increase left to right (hand-made; the pipeline's decrease)
+    got a negative field of view, refused later as "fov must be in (0, 2*pi)"."""
+    from testbed.loop import scanline_views
+
+    b = np.radians(np.linspace(20.0, -29.0, 50))
+    yaw, fov = scanline_views([b, b[::-1]])
+    assert yaw[1] == yaw[0] and fov[1] == fov[0] and np.degrees(fov[0]) == pytest.approx(50.0)
