@@ -18,6 +18,7 @@ import numpy as np
 
 from scene.checks import used_or_refused
 from testbed.output import save_figure
+from testbed.parallel import chunk
 
 from . import core
 from .limit import limit_residual
@@ -110,7 +111,7 @@ def run_trials(m, start, stop, cameras, limit_cameras, radius, h, seed) -> np.nd
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
     tasks, weights, keys = [], [], []
     for m in opts["objects"]:
-        for a, b in core.chunks(trials, CHUNK):
+        for a, b in chunk(trials, CHUNK):
             tasks.append((m, a, b, opts["cameras"], opts["limit_cameras"], opts["radius"],
                           opts["quadrature"], seed))
             weights.append(b - a)

@@ -290,15 +290,6 @@ def parse_names(name: str, text: str, valid) -> list[str]:
     return list(dict.fromkeys(names))
 
 
-def chunks(n: int, size: int) -> list[tuple[int, int]]:
-    """Trials ``0 .. n-1`` cut into ``(start, stop)`` runs of at most ``size``, one task each.
-
-    >>> chunks(5, 2)
-    [(0, 2), (2, 4), (4, 5)]
-    """
-    return [(s, min(s + size, n)) for s in range(0, n, size)]
-
-
 def mean_sem(x) -> tuple[float, float]:
     """Mean and standard error of the mean (0 for a single value)."""
     x = np.asarray(x, dtype=float)

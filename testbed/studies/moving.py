@@ -20,6 +20,7 @@ import numpy as np
 
 from scene.checks import used_or_refused
 from testbed.output import save_figure
+from testbed.parallel import chunk
 
 from . import core
 
@@ -106,7 +107,7 @@ def run_trials(start, stop, opts, seed) -> np.ndarray:
 
 
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
-    chunks = core.chunks(trials, CHUNK)
+    chunks = chunk(trials, CHUNK)
     res = np.concatenate(runner(run_trials, [(a, b, opts, seed) for a, b in chunks],
                                 [b - a for a, b in chunks], "moving"))
     records = []

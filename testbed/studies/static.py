@@ -13,6 +13,7 @@ from math import comb
 import numpy as np
 
 from scene.checks import used_or_refused
+from testbed.parallel import chunk
 
 from . import core
 
@@ -78,7 +79,7 @@ def run_trials(start, stop, opts, seed) -> np.ndarray:
 
 
 def run(opts: dict, trials: int, seed: int, runner) -> dict:
-    chunks = core.chunks(trials, CHUNK)
+    chunks = chunk(trials, CHUNK)
     res = np.concatenate(runner(run_trials, [(a, b, opts, seed) for a, b in chunks],
                                 [b - a for a, b in chunks], "static"))
     records = []
