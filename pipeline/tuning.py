@@ -29,14 +29,15 @@ SPACE = {
 }
 
 
-def outside_space(params: PipelineParams) -> dict[str, tuple]:
-    """The parameters of ``params`` that :data:`SPACE` does not reach: name -> (value, low,
-    high). The first trial still uses them; the search never comes back to them.
+def outside_space(params: PipelineParams, space: dict | None = None) -> dict[str, tuple]:
+    """The parameters of ``params`` that ``space`` (default :data:`SPACE`; the search's is
+    :func:`searched_space`) does not reach: name -> (value, low, high). The first trial
+    still uses them; the search never comes back to them.
 
     >>> outside_space(PipelineParams(threshold_deg=45.0, opening_kernel=11))
     {'threshold_deg': (45.0, 1.0, 30.0), 'opening_kernel': (11, 1, 9)}
     """
-    return {name: (getattr(params, name), low, high) for name, (_, low, high, *_) in SPACE.items()
+    return {name: (getattr(params, name), low, high) for name, (_, low, high, *_) in (space or SPACE).items()
             if not low <= getattr(params, name) <= high}
 
 

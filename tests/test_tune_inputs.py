@@ -114,13 +114,10 @@ def test_the_search_stays_below_the_rows_of_a_small_cameras_rectified_column(mon
     """SPACE searched column_threshold up to 60 pixels whatever the camera: a 64 x 40 camera's
     rectified columns have 46 rows, so a trial above that emptied every scanline and, were it
     the best, tune wrote a file scanlines refuses."""
-    import scene
     from pipeline import PipelineParams
     from pipeline.rectify import level_cameras
 
-    cams = [scene.Camera.from_pose(i + 1, [x, 0.05, 2.2], np.radians(90 + d), np.radians(15), 64, 40,
-                                   np.radians(49), [-0.18, 0.06, 0, 0, 0])
-            for i, (x, d) in enumerate([(1.5, -20), (5.0, 20)])]
+    cams = tiny_cameras()
     rows = level_cameras(cams)[1]
     assert rows < pipeline.tuning.SPACE["column_threshold"][2]
     bg, frames, _ = synthetic_sequence(cams, 2, np.random.default_rng(0))
@@ -149,3 +146,24 @@ def test_frames_with_nobody_in_view_are_warned_of(tmp_path, capsys):
         capsys.readouterr()
         camtask(["tune", str(tmp_path / name), "--trials", "2", "--out", str(tmp_path / f"{name}.yaml")])
         assert (warning in capsys.readouterr().err) == warned, name
+
+
+def tiny_cameras():
+    """Two 64 x 40 cameras: their rectified columns have 46 rows, fewer than SPACE's 60."""
+    import scene
+
+    return [scene.Camera.from_pose(i + 1, [x, 0.05, 2.2], np.radians(90 + d), np.radians(15), 64, 40,
+                                   np.radians(49), [-0.18, 0.06, 0, 0, 0])
+            for i, (x, d) in enumerate([(1.5, -20), (5.0, 20)])]
+
+
+def test_a_start_outside_the_search_is_warned_of_with_the_range_searched(tmp_path, capsys):
+    """The warning named SPACE's 1..60 for column_threshold where the search covered 1..46."""
+    cams = tiny_cameras()
+    bg, images, labels = synthetic_sequence(cams, 2, np.random.default_rng(2))
+    write_render_dir(tmp_path / "tiny", cams, bg, images, labels)
+    (tmp_path / "s.yaml").write_text("column_threshold: 0.5\n")
+    assert camtask(["tune", str(tmp_path / "tiny"), "--trials", "1", "--params", str(tmp_path / "s.yaml"),
+                    "--out", str(tmp_path / "t.yaml"), "--json"]) == 0
+    assert capsys.readouterr().err.splitlines()[0].startswith(
+        "warning: --params: column_threshold 0.5 is outside the searched range 1..46: ")

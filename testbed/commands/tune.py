@@ -43,7 +43,7 @@ def run(args) -> int:
     from pipeline.io import RenderDir
     from pipeline.params import load_params, params_option
     from pipeline.rectify import check_column_threshold
-    from pipeline.tuning import outside_space, tune
+    from pipeline.tuning import outside_space, searched_space, tune
     from testbed.cli import check_seed
     from testbed.commands.scanlines import default_output, episode_dir
     from testbed.output import check_output_file
@@ -59,7 +59,7 @@ def run(args) -> int:
     render = RenderDir(episode_dir(Path(args.dir)))
     # as scanlines refuses it: a start no other command runs, and the best if no trial beats it
     check_column_threshold(start.column_threshold, render.cameras, params_option(args.params))
-    for name, (value, low, high) in outside_space(start).items():
+    for name, (value, low, high) in outside_space(start, searched_space(render.cameras)).items():
         print(f"warning: --params: {name} {value:g} is outside the searched range {low:g}..{high:g}: the first "
               "trial uses it, the others search the range (docs/pipeline.md)", file=sys.stderr)
     out = check_output_file("--out", args.out) if args.out is not None else \
