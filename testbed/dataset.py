@@ -116,7 +116,8 @@ def read_people(path: str | os.PathLike) -> np.ndarray:
     radius, height), one row per person and frame: also for a single row or none. A file
     that cannot be parsed or lacks a column is a one-line ValueError naming it."""
     try:
-        table = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8", ndmin=1)
+        table = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8", ndmin=1,
+                              usemask=True)          # masked: an empty field
     except ValueError as exc:               # "Some errors were detected !\n    Line #2 (got 4 columns ...)"
         raise ValueError(f"{path}: cannot read ({' '.join(str(exc).split())})") from None
     found = table.dtype.names or ()
@@ -125,8 +126,18 @@ def read_people(path: str | os.PathLike) -> np.ndarray:
             raise ValueError(f"{path}: no column {name!r} (expected the header {','.join(PEOPLE_DTYPE.names)})")
     people = np.empty(len(table), PEOPLE_DTYPE)
     for name in PEOPLE_DTYPE.names:
+        column = table[name]
+        empty = np.ma.getmaskarray(column)
         try:
-            people[name] = table[name]
+            values = np.asarray(column.data, dtype=float)
         except (ValueError, TypeError):     # a word among the numbers
             raise ValueError(f"{path}: column {name!r}: expected numbers, got text") from None
+        whole = PEOPLE_DTYPE[name].kind == "i"
+        bad = empty | ~np.isfinite(values) | ((values != np.round(values)) if whole else False)
+        if bad.any():                       # 1.5 would be cut to 1, an empty field read as -1
+            row = int(np.argmax(bad))
+            got = "an empty field" if empty[row] else f"{values[row]:g}"
+            raise ValueError(f"{path}: column {name!r}, row {row + 1}: expected "
+                             f"{'a whole number' if whole else 'a finite number'}, got {got}")
+        people[name] = values
     return people

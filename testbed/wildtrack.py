@@ -53,7 +53,7 @@ import cv2
 import numpy as np
 
 from pipeline.files import temp_folder
-from testbed.dataset import read_meta, read_people
+from testbed.dataset import PEOPLE_DTYPE, read_meta, read_people
 from testbed.output import made_folder
 from testbed.png import write_png
 
@@ -308,12 +308,9 @@ def people_table(path: Path, frames: int, people: int) -> np.ndarray:
     """people.csv (:func:`testbed.dataset.read_people`), refused in one line unless it lists
     each of the ``people`` persons once in each of the ``frames`` frames."""
     if people == 0:
-        return np.zeros(0, [("frame", int), ("person_id", int), ("x", float), ("y", float)])
-    table = np.atleast_1d(read_people(path))
-    try:
-        listed = sorted(zip(table["frame"].tolist(), table["person_id"].tolist()))
-    except ValueError as exc:               # no such column
-        raise ValueError(f"{path}: cannot read ({exc})") from None
+        return np.zeros(0, PEOPLE_DTYPE)
+    table = read_people(path)
+    listed = sorted(zip(table["frame"].tolist(), table["person_id"].tolist()))
     if listed != [(f, i) for f in range(frames) for i in range(people)]:
         raise ValueError(f"{path}: expected one row per person (0..{people - 1}) and frame (0..{frames - 1}), "
                          f"as meta.json says; its {len(table)} rows do not")

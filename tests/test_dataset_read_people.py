@@ -43,3 +43,17 @@ def test_a_file_without_the_columns_is_one_line_naming_it(tmp_path):
     with pytest.raises(ValueError, match=r"people\.csv: no column 'frame'") as exc:
         read_people(path)
     assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize(("row", "says"), [
+    ("0,,1,2,0.25,1.75", "column 'person_id', row 1: expected a whole number, got an empty field"),
+    ("1.5,0,1,2,0.25,1.75", "column 'frame', row 1: expected a whole number, got 1.5"),
+    ("0,0,nan,2,0.25,1.75", "column 'x', row 1: expected a finite number, got nan"),
+])
+def test_a_value_that_is_not_a_position_is_one_line_naming_it(tmp_path, row, says):
+    """An empty field came back as person -1, a frame 1.5 as frame 1, nan as a position."""
+    path = tmp_path / "people.csv"
+    path.write_text(HEADER + row + "\n")
+    with pytest.raises(ValueError) as err:
+        read_people(path)
+    assert str(err.value) == f"{path}: {says}"

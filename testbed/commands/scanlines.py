@@ -108,7 +108,7 @@ def people_size(root: Path) -> tuple[float, float] | None:
     from testbed.dataset import read_people
 
     if (root / "people.csv").is_file():
-        table = np.atleast_1d(read_people(root / "people.csv"))
+        table = read_people(root / "people.csv")
         if table.size:
             return float(np.min(table["height"])), 2 * float(np.min(table["radius"]))
     if (root / "meta.json").is_file():
