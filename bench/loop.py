@@ -36,9 +36,9 @@ def main(argv=None) -> int:
 
     scene = load_scene("lab")
     try:
-        config = LoopConfig("incremental", args.k, m=1).check(len(scene.cameras))
+        config = LoopConfig("incremental", args.k, m=1).check(len(scene.cameras), as_options=True)
     except ValueError as exc:
-        p.error(f"--{exc}")
+        p.error(str(exc))
     motion, sensor = np.random.default_rng(0).spawn(2)
     truth = walk(scene, args.frames + 5, motion)
     source = LiveSource(scene, None, sensor)

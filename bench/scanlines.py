@@ -67,6 +67,8 @@ def main(argv=None) -> int:
     try:
         cams, bg, frames = load_data(args)
     except (ValueError, OSError) as exc:        # not a render directory, a frame that cannot be read
+        if args.dir is None:                    # the synthetic frames: not the user's input
+            raise
         ap.error(f"--dir: {exc}")
     params = load_params()
     model = background_model(bg)
