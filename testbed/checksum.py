@@ -56,5 +56,7 @@ def file_digest(path: str | os.PathLike, algorithm: str = ALGORITHM) -> str:
             for block in iter(lambda: f.read(1 << 20), b""):
                 h.update(block)
     except OSError as exc:
-        raise type(exc)(f"cannot read {path}: {exc.strerror or exc}") from None
+        error = type(exc)(f"cannot read {path}: {exc.strerror or exc}")
+        error.errno = exc.errno               # still EIO, ENOENT, ... for a caller that asks
+        raise error from None
     return h.hexdigest()

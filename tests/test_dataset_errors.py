@@ -661,3 +661,14 @@ def test_overwrite_keeps_the_old_dataset_until_the_local_workers_are_up(tmp_path
                      "--cameras", "1", "--overwrite")
     assert code != 0 and line == "camtask render: error: the local cluster did not start"
     assert (out / "episode_0000").is_dir() and (out / "manifest.json").is_file()
+
+
+def test_a_file_that_cannot_be_read_keeps_its_errno(tmp_path):
+    """file_digest names the file it cannot read; its error kept the kind but lost the errno."""
+    import errno
+
+    from testbed.checksum import file_digest
+
+    with pytest.raises(FileNotFoundError) as err:
+        file_digest(tmp_path / "gone.png")
+    assert err.value.errno == errno.ENOENT and str(err.value).startswith(f"cannot read {tmp_path / 'gone.png'}: ")
