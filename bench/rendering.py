@@ -73,7 +73,7 @@ def main(argv=None) -> int:
         r.render(positions, rng=rng)                # the cached background
         idx = np.arange(len(r.numbers))
         boxes = [_boxes(b, r.canvas_size) for b in r._rects(idx, positions)]
-        k = max(1, args.steps // 3)
+        k = args.steps // 3
         for _ in range(3):
             step.append(median_ms(lambda: r.render(positions, rng=rng), k, "step"))
             floor.append(median_ms(lambda: r.raster.draw(r.view_projs, positions), k, "floor"))

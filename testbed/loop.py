@@ -209,6 +209,10 @@ def scanline_views(bearings) -> tuple[np.ndarray, np.ndarray]:
         and the pitch and the rectification narrow it (lab: 49.16 degrees, 0.21 off the
         axis).
 
+    The same view as :func:`tasking.cones.scanline_intervals` gives, but for the yaw's last
+    bit (that one wraps by a modulo, this one through ``np.angle``): the recorded tasking
+    results were made with this one.
+
     >>> yaw, fov = scanline_views([np.radians([10.0, 0.0, -10.0])])
     >>> np.degrees(yaw).round(6).tolist(), np.degrees(fov).round(6).tolist()
     ([0.0], [30.0])
