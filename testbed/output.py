@@ -30,6 +30,7 @@ def check_output_file(option: str, path: str | os.PathLike, suffix: str | None =
     >>> top = tempfile.mkdtemp()
     >>> check_output_file("--plot", f"{top}/new/fig.png", ".png").name, os.listdir(top)
     ('fig.png', [])
+    >>> os.rmdir(top)
     """
     text = os.fspath(path)
     if not text or text.endswith(("/", os.sep)):
@@ -76,6 +77,7 @@ def made_folder(option: str, folder: str | os.PathLike, keep: bool = True) -> It
     True
     >>> os.listdir(top)
     []
+    >>> top.rmdir()
     """
     folder = Path(folder)
     made = [f for f in (folder, *folder.parents) if not _exists(f)]      # deepest first
