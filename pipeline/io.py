@@ -100,10 +100,7 @@ def check_camera(camera: Camera, name: str) -> None:
     would be remapped into scanlines and bearings of rays it renders twice."""
     from .rectify import check_rectifiable
 
-    try:
-        check_rectifiable([camera])
-    except ValueError as exc:
-        raise ValueError(f"{name}: {exc}") from None
+    check_rectifiable([camera], [name])
 
 
 def number_in_name(path: str | os.PathLike, default: int | None = None) -> int | None:
@@ -156,8 +153,11 @@ class RenderDir:
             raise ValueError(f"{name}: {self.root} is not a render directory: it has no calibration/camNN.yaml files")
         # numbered as the files (and so the frames/camNN folders) are named
         self.cameras = tuple(load_calibration(p, number_in_name(p)) for p in calib)
-        for cam, path in zip(self.cameras, calib):      # as `camtask render` checks its scene's
-            check_camera(cam, f"{name}: {path.relative_to(self.root)}")
+        from .rectify import check_rectifiable
+
+        # as `camtask render` checks its scene's: each lens once, not once per camera
+        check_rectifiable(self.cameras, [f"{name}: {p.relative_to(self.root)}" for p in calib])
+        for cam, path in zip(self.cameras, calib):
             if (cam.width, cam.height) != (self.cameras[0].width, self.cameras[0].height):
                 raise ValueError(f"{name}: {path.relative_to(self.root)} is {cam.width}x{cam.height} pixels, "
                                  f"{calib[0].relative_to(self.root)} {self.cameras[0].width}x{self.cameras[0].height}; "

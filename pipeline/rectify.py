@@ -159,18 +159,26 @@ def check_column_threshold(column_threshold: float, cameras, option: str) -> Non
                          "column; every scanline would be empty")
 
 
-def check_rectifiable(cameras) -> None:
+def check_rectifiable(cameras, names=None) -> None:
     """Raise the one-line error of :func:`check_lens` or :func:`virtual_extent` for the first
     camera whose lens folds over or that cannot be rectified to a level camera (before any
     work starts, rather than at the first frame). A lens is checked once for all the cameras
-    that share it (the lab's 16: 0.06 -> 0.03 s)."""
+    that share it (the lab's 16: 0.06 -> 0.03 s; one call per camera took 0.24 s).
+
+    names : optional, one per camera: what its error starts with (``"DIR: calibration/cam03.yaml"``)
+    """
     lenses = set()
-    for camera in cameras:
-        lens = (camera.K.tobytes(), camera.dist.tobytes(), camera.width, camera.height)
-        if lens not in lenses:
-            check_lens(camera)
-            lenses.add(lens)
-        virtual_extent(camera)
+    for i, camera in enumerate(cameras):
+        try:
+            lens = (camera.K.tobytes(), camera.dist.tobytes(), camera.width, camera.height)
+            if lens not in lenses:
+                check_lens(camera)
+                lenses.add(lens)
+            virtual_extent(camera)
+        except ValueError as exc:
+            if names is None:
+                raise
+            raise ValueError(f"{names[i]}: {exc}") from None
 
 
 def virtual_camera_matrix(camera: Camera, width: int | None = None) -> tuple[np.ndarray, int]:
