@@ -148,7 +148,8 @@ class RenderDir:
                 raise ValueError(f"{name}: {str(self.root)!r} is a file, not a folder (a render directory "
                                  "written by `camtask render`)")
             raise FileNotFoundError(f"{name}: no such folder {str(self.root)!r}")
-        calib = sorted((self.root / "calibration").glob("cam*.yaml"))
+        # in number order (cam100 after cam99, not between cam10 and cam11 as text sorts it)
+        calib = sorted((self.root / "calibration").glob("cam*.yaml"), key=lambda p: number_order(p.name))
         if not calib:
             raise ValueError(f"{name}: {self.root} is not a render directory: it has no calibration/camNN.yaml files")
         # numbered as the files (and so the frames/camNN folders) are named

@@ -98,3 +98,22 @@ def test_a_folder_of_images_is_read_in_the_order_of_their_numbers(tmp_path):
     cv2.imwrite(str(folder / "frame010b.png"), np.full((4, 6, 3), 99, np.uint8))   # after frame10: same number, longer
     order = [int(f[0, 0, 0]) for f in iter_video_frames(folder)]
     assert order == [1, 2, 3, 10, 99, 11, 20]
+
+
+def test_cameras_numbered_past_99_are_read_in_number_order(tmp_path):
+    """calibration/cam100.yaml sorts between cam10 and cam11 as text: `camtask scanlines` on
+    an episode of 100 or more cameras wrote them in that order, not the render's number order,
+    so its scanlines.npz no longer equalled the episode's own (camera_numbers, rows)."""
+    cams = [scene.Camera.from_pose(n, [1.0 + 0.01 * n, 0.05, 2.2], np.radians(70), np.radians(15), 32, 24,
+                                   np.radians(49), [0, 0, 0, 0, 0]) for n in (100, 9, 11, 10)]
+    write_render_dir(tmp_path, cams, *synthetic_sequence(cams, 1, np.random.default_rng(0)))
+    out = tmp_path / "s.npz"
+    camtask(["scanlines", str(tmp_path), "--out", str(out), "--params", str(small_params(tmp_path)), "--json"])
+    assert [c.number for c in RenderDir(tmp_path).cameras] == [9, 10, 11, 100]
+    assert np.load(out)["camera_numbers"].tolist() == [9, 10, 11, 100]
+
+
+def small_params(folder):
+    path = folder / "params.yaml"
+    path.write_text("opening_kernel: 1\nmedian_kernel: 1\ncolumn_threshold: 2.0\n")
+    return path
