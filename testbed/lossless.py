@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import subprocess
 import tempfile
 from collections.abc import Iterator
@@ -45,10 +46,21 @@ def _ffmpeg() -> str:
         raise OSError(f"ffmpeg: not found ({' '.join(str(exc).split())})") from None
 
 
-def _last_line(log) -> str:
+#: The ``[component @ 0x55d0c4a8b740] `` context ffmpeg puts before a message: pointer addresses, noise to a user.
+_CONTEXT = re.compile(r"^(\[[^\]]* @ 0x[0-9a-fA-F]+\] *)+")
+
+
+def _message(log) -> str:
+    """ffmpeg's reason in the stderr ``log`` (a binary file), without its context prefixes: its
+    summary of a file it could not open (the last line, ``Error opening input files: ...``),
+    else its first message (``File ended prematurely``, ``slice CRC mismatch``), not the
+    consequences it prints after it (``Nothing was written into output file``)."""
     log.seek(0)
-    lines = [ln.strip() for ln in log.read().decode("utf-8", "replace").splitlines() if ln.strip()]
-    return lines[-1] if lines else "no message"
+    lines = [_CONTEXT.sub("", ln.strip()) for ln in log.read().decode("utf-8", "replace").splitlines()]
+    lines = [ln for ln in lines if ln]
+    if not lines:
+        return "no message"
+    return lines[-1] if lines[-1].startswith("Error opening") else lines[0]
 
 
 class VideoWriter:
@@ -78,7 +90,7 @@ class VideoWriter:
         proc.kill()
         code = proc.wait()
         status = f"killed by signal {-code}" if code < 0 else f"exit status {code}"
-        return OSError(f"cannot write {self.path}: ffmpeg {what} ({status}: {_last_line(self._log)})")
+        return OSError(f"cannot write {self.path}: ffmpeg {what} ({status}: {_message(self._log)})")
 
     def write(self, rgb: np.ndarray) -> None:
         rgb = np.ascontiguousarray(rgb, dtype=np.uint8)
@@ -158,9 +170,9 @@ def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[n
         log.seek(0)
         if code != 0 or log.read().strip():
             if n == 0 and not held:
-                raise ValueError(f"video: cannot read {str(path)!r}: {_last_line(log)} "
+                raise ValueError(f"video: cannot read {str(path)!r}: {_message(log)} "
                                  "(not a video ffmpeg can open, or corrupt)")
-            raise ValueError(f"video: cannot read {str(path)!r} after {n} frames: {_last_line(log)} "
+            raise ValueError(f"video: cannot read {str(path)!r} after {n} frames: {_message(log)} "
                              "(truncated or corrupt)")
         if short:
             raise ValueError(f"video: {str(path)!r}: frame {n} ends early")

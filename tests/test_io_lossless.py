@@ -78,3 +78,33 @@ def test_a_closed_reader_stops_its_ffmpeg(tmp_path, monkeypatch):
     next(gen)
     gen.close()
     assert procs and all(p.poll() is not None for p in procs)
+
+
+def test_errors_give_ffmpeg_s_reason_without_its_pointer_addresses(tmp_path):
+    """read_video quoted ffmpeg's last stderr line verbatim: ``[ffv1 @ 0x55d0...] slice CRC
+    mismatch`` and, for a file cut after its header, ``[out#0/image2pipe @ 0x...] Nothing was
+    written into output file``, a consequence, not the reason (``File ended prematurely``)."""
+    data = write(tmp_path / "v.mkv", clip(3, 48, 64)).read_bytes()
+    corrupt = bytearray(data)
+    corrupt[len(data) // 2] ^= 0xFF
+    cases = {"head.mkv": (data[:1000], "File ended prematurely"),
+             "cut.mkv": (data[: len(data) * 2 // 3], "File ended prematurely"),
+             "crc.mkv": (bytes(corrupt), "slice CRC mismatch"),
+             "junk.mkv": (b"\x00" * 5000, "Error opening input files: Invalid data found when processing input")}
+    for name, (content, reason) in cases.items():
+        (tmp_path / name).write_bytes(content)
+        with pytest.raises(ValueError) as err:
+            list(read_video(tmp_path / name, 3))
+        message = str(err.value)
+        assert f"{name}'" in message and reason in message, message
+        assert " @ 0x" not in message and "[" not in message and "\n" not in message, message
+
+
+def test_a_writer_s_error_gives_ffmpeg_s_reason_without_its_pointer_addresses(tmp_path):
+    from testbed.lossless import _message
+
+    log = tmp_path / "log"            # what ffmpeg wrote when the disk filled as it closed the file
+    log.write_bytes(b"[out#0/matroska @ 0x564c7e74d440] Error writing trailer: No space left on device\n"
+                    b"[out#0/matroska @ 0x564c7e74d440] Error closing file: No space left on device\n")
+    with log.open("rb") as f:
+        assert _message(f) == "Error writing trailer: No space left on device"
