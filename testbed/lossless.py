@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import shutil
 import subprocess
 import tempfile
 from collections.abc import Iterator
@@ -37,13 +38,21 @@ def check_frame_rate(name: str, fps: float) -> float:
     return float(fps)
 
 
-def _ffmpeg() -> str:
+def ffmpeg_exe() -> str:
+    """The ffmpeg that imageio-ffmpeg names, else a one-line OSError: ``camtask render
+    --format video`` checks it before any work. imageio-ffmpeg returns IMAGEIO_FFMPEG_EXE
+    untested, so a name there that is no program is refused here, naming the variable."""
     import imageio_ffmpeg
 
     try:
-        return imageio_ffmpeg.get_ffmpeg_exe()
+        exe = imageio_ffmpeg.get_ffmpeg_exe()
     except RuntimeError as exc:
         raise OSError(f"ffmpeg: not found ({' '.join(str(exc).split())})") from None
+    if shutil.which(exe) is None:
+        given = " (IMAGEIO_FFMPEG_EXE)" if exe == os.environ.get("IMAGEIO_FFMPEG_EXE") else ""
+        raise OSError(f"ffmpeg: {exe!r}{given} is not an executable file; install imageio-ffmpeg's "
+                      "binaries or point IMAGEIO_FFMPEG_EXE at an ffmpeg")
+    return exe
 
 
 #: The ``[component @ 0x55d0c4a8b740] `` context ffmpeg puts before a message: pointer addresses, noise to a user.
@@ -78,7 +87,7 @@ class VideoWriter:
         self.shape = (int(height), int(width), 3)
         rate = str(Fraction(check_frame_rate("video", fps)).limit_denominator())
         # the command imageio_ffmpeg.write_frames ran (same bytes), with ffmpeg's exit status checked
-        cmd = [_ffmpeg(), "-y", "-f", "rawvideo", "-vcodec", "rawvideo", "-s", f"{int(width)}x{int(height)}",
+        cmd = [ffmpeg_exe(), "-y", "-f", "rawvideo", "-vcodec", "rawvideo", "-s", f"{int(width)}x{int(height)}",
                "-pix_fmt", "rgb24", "-r", rate, "-i", "-", "-an", "-vcodec", "ffv1", "-pix_fmt", "bgr0",
                "-v", "error"] + BITEXACT + [str(self.path)]
         self._log = tempfile.TemporaryFile()  # noqa: SIM115 (closed by close())
@@ -138,7 +147,7 @@ def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[n
     """
     path = check_input_file("video", path)
     log = tempfile.TemporaryFile()  # noqa: SIM115 (closed in finally)
-    proc = subprocess.Popen([_ffmpeg(), "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
+    proc = subprocess.Popen([ffmpeg_exe(), "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
                              "-f", "image2pipe", "-c:v", "ppm", "-pix_fmt", "rgb24", "-"],
                             stdout=subprocess.PIPE, stderr=log, start_new_session=True)
     n, short, held = 0, False, False           # frames yielded; a frame read but not yielded

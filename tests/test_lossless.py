@@ -132,3 +132,21 @@ def test_an_episode_whose_third_video_fails_to_start_closes_the_two_started(tmp_
         render_episode(config, 0, str(tmp_path))
     assert len(started) == 2 and all(proc.poll() is not None for proc in started)    # ffmpeg ended
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_ffmpeg_that_is_not_there_is_named_before_any_work(tmp_path, monkeypatch, capsys):
+    """IMAGEIO_FFMPEG_EXE naming no program (imageio-ffmpeg takes it untested) gave
+    ``[Errno 2] No such file or directory: '...'`` once the first frame had rendered, and left
+    a manifest of a run that had finished nothing."""
+    missing = tmp_path / "bin" / "ffmpeg"
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(missing))
+    out = tmp_path / "out"
+    assert main(["render", "lab", "--frames", "1", "--cameras", "1", "--format", "video", "--workers", "0",
+                 "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == (f"camtask render: error: ffmpeg: {str(missing)!r} (IMAGEIO_FFMPEG_EXE) is not an executable "
+                   "file; install imageio-ffmpeg's binaries or point IMAGEIO_FFMPEG_EXE at an ffmpeg")
+    assert not out.exists()
+    (tmp_path / "v.mkv").write_bytes(b"\x00")
+    with pytest.raises(OSError, match=r"^ffmpeg: .*bin/ffmpeg' \(IMAGEIO_FFMPEG_EXE\) is not an executable file"):
+        next(read_video(tmp_path / "v.mkv"))

@@ -94,8 +94,9 @@ def build_config(args: argparse.Namespace):
                            params_option(args.params))
     silhouette_dtype(scene.people.count, "--people" if args.people is not None else "people.count")
     if args.format == "video":
-        from testbed.lossless import check_frame_rate
+        from testbed.lossless import check_frame_rate, ffmpeg_exe
         check_frame_rate("--format video: the scene's frame_rate", scene.frame_rate)
+        ffmpeg_exe()                                  # found only at the first frame's video otherwise
     return config, scene
 
 
