@@ -17,9 +17,11 @@ class VideoWriter:
     def __init__(self, path: str | os.PathLike, fps: float):
         import imageio_ffmpeg
 
+        from testbed.lossless import ffmpeg_exe
         from testbed.output import check_output_file
 
         self.path = check_output_file("--video", path, ".mp4")
+        ffmpeg_exe()                  # one line naming it now, not an errno at the first frame
         # a name of this run's own: two runs given one --video must not write into one file
         self.tmp = self.path.with_name(f".{self.path.stem}.partial-{os.getpid()}-{os.urandom(4).hex()}{self.path.suffix}")
         self.fps = fps

@@ -487,3 +487,17 @@ def test_scanline_views_read_increasing_bearings_as_the_same_view():
     b = np.radians(np.linspace(20.0, -29.0, 50))
     yaw, fov = scanline_views([b, b[::-1]])
     assert yaw[1] == yaw[0] and fov[1] == fov[0] and np.degrees(fov[0]) == pytest.approx(50.0)
+
+
+def test_run_video_with_no_ffmpeg_is_one_line_naming_it_before_any_frame(tmp_path, monkeypatch, capsys):
+    """IMAGEIO_FFMPEG_EXE naming no program gave ``[Errno 2] No such file or directory: '...'``
+    once the first frame had been rendered and tasked."""
+    missing = tmp_path / "bin" / "ffmpeg"
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(missing))
+    video = tmp_path / "run.mp4"
+    assert main(["run", "lab", "--frames", "2", "--k", "1", "--json", "--video", str(video)]) == 1
+    captured = capsys.readouterr()
+    assert captured.err.strip() == (f"camtask run: error: ffmpeg: {str(missing)!r} (IMAGEIO_FFMPEG_EXE) is not an "
+                                    "executable file; install imageio-ffmpeg's binaries or point "
+                                    "IMAGEIO_FFMPEG_EXE at an ffmpeg")
+    assert captured.out == "" and list(tmp_path.iterdir()) == []
