@@ -5,6 +5,7 @@ Render directory layout (written by ``camtask render``)::
     DIR/calibration/camNN.yaml   cv2.FileStorage: camera_matrix, distortion_coefficients,
                                  rvec, tvec (world -> camera, metres), image_width, image_height
     DIR/frames/camNN/NNNNNN.png  RGB frames (stored by OpenCV as BGR on disk)
+    DIR/frames/camNN.mkv         or the same frames as one lossless video per camera (``--format video``)
     DIR/masks/camNN/NNNNNN.png   labels: 0 background, person id + 1 elsewhere
     DIR/background/camNN.png     the empty room
 """
@@ -172,15 +173,18 @@ class RenderDir:
                              "camera's frames need its calibration")
         first = self.root / "frames" / self.names[0]
         self.frame_names = tuple(sorted(p.name for p in first.glob("*.png")))
-        video = first.with_name(f"{self.names[0]}.mkv")
-        if not self.frame_names and video.is_file():
-            raise ValueError(f"{name}: {self.root} holds its frames as video ({video.relative_to(self.root)}, "
-                             "`camtask render --format video`); this reads PNG frames: render with --format png, "
-                             "or decode the videos with testbed.lossless.read_video")
+        #: frames/camNN.mkv of each camera (`camtask render --format video`), else None: PNG frames
+        self.videos = None
+        kind = "frames"
+        if not self.frame_names and first.with_name(f"{self.names[0]}.mkv").is_file():
+            self.videos = tuple(self.root / "frames" / f"{n}.mkv" for n in self.names)
+            kind, first = "masks", self.root / "masks" / self.names[0]      # the frames' names are the masks'
+            self.frame_names = tuple(sorted(p.name for p in first.glob("*.png")))
+        self._decoders, self._next = None, 0    # the videos' readers, and the frame they yield next
         if not self.frame_names:
             raise ValueError(f"{name}: {first} has no frames")
         for cam in self.names[1:]:              # frame i is the same moment in every camera
-            other = self.root / "frames" / cam
+            other = self.root / kind / cam
             names = tuple(sorted(p.name for p in other.glob("*.png")))
             if names != self.frame_names:
                 odd = sorted(set(names) ^ set(self.frame_names))
@@ -194,8 +198,10 @@ class RenderDir:
         """Refuse, in one line before any frame is read, a render directory that lacks a
         frame, label image or background of its first ``frames`` frames (one missing at frame
         250 was found after reading the 249 before it)."""
+        kinds = ("masks",) if self.videos else ("frames", "masks")
         wanted = [Path("background") / f"{c}.png" for c in self.names] + [
-            Path(kind) / c / f for f in self.frame_names[:frames] for kind in ("frames", "masks") for c in self.names]
+            Path(kind) / c / f for f in self.frame_names[:frames] for kind in kinds for c in self.names]
+        wanted += [p.relative_to(self.root) for p in self.videos or ()]
         missing = [str(p) for p in wanted if not (self.root / p).is_file()]
         if missing:
             raise ValueError(f"{self.name}: {self.root} lacks {len(missing)} file{'' if len(missing) == 1 else 's'} "
@@ -216,9 +222,38 @@ class RenderDir:
         return self._stack("background", [self.root / "background" / f"{n}.png" for n in self.names], read_rgb)
 
     def frames(self, index: int) -> np.ndarray:
-        """(n_cams, H, W, 3) uint8 RGB frame ``index`` (0-based) of every camera."""
+        """(n_cams, H, W, 3) uint8 RGB frame ``index`` (0-based) of every camera.
+
+        From videos, frames are decoded in order by one ffmpeg per camera, kept between calls
+        (:func:`testbed.lossless.read_video`: a truncated or corrupt video, or one of another
+        number of frames than the masks, is a one-line ValueError naming it): reading them in
+        order costs one decoding; an earlier index than the last starts the videos again.
+        """
         f = self.frame_names[index]
-        return self._stack("frames", [self.root / "frames" / n / f for n in self.names], read_rgb)
+        if self.videos is None:
+            return self._stack("frames", [self.root / "frames" / n / f for n in self.names], read_rgb)
+        index = self.frame_names.index(f)
+        if self._decoders is None or index < self._next:
+            from testbed.lossless import read_video
+
+            self.close()
+            self._decoders, self._next = [read_video(p, len(self)) for p in self.videos], 0
+        while True:
+            images = dict(zip(self.videos, [next(d) for d in self._decoders]))
+            self._next += 1
+            if self._next == len(self):         # read to their end: a longer video is not of these masks
+                for path, decoder in zip(self.videos, self._decoders):
+                    if next(decoder, None) is not None:
+                        raise ValueError(f"video: {str(path)!r} holds more than {len(self)} frames; "
+                                         f"expected {len(self)}, as masks/{path.stem} has")
+            if self._next > index:
+                return self._stack("frames", self.videos, images.__getitem__)
+
+    def close(self) -> None:
+        """Stop the ffmpeg processes decoding the videos (they also stop when this is collected)."""
+        for decoder in self._decoders or ():
+            decoder.close()
+        self._decoders = None
 
     def labels(self, index: int) -> np.ndarray:
         """(n_cams, H, W) int label images of frame ``index``."""

@@ -108,3 +108,39 @@ def test_a_writer_s_error_gives_ffmpeg_s_reason_without_its_pointer_addresses(tm
                     b"[out#0/matroska @ 0x564c7e74d440] Error closing file: No space left on device\n")
     with log.open("rb") as f:
         assert _message(f) == "Error writing trailer: No space left on device"
+
+
+def test_a_render_directory_of_videos_reads_as_its_png_twin(tmp_path):
+    """RenderDir refused frames/camNN.mkv (`render --format video`): `scanlines DIR` and `tune`
+    could not read a video episode. Frames come in any order; a video of another length than
+    the masks, or missing, is one line naming it."""
+    import shutil
+
+    import scene
+    from pipeline.io import RenderDir
+    from pipeline.synthetic import synthetic_sequence, write_render_dir
+
+    cams = [scene.Camera.from_pose(i + 1, [x, 0.05, 2.2], np.radians(90 + d), np.radians(15), 41, 30,
+                                   np.radians(49), [-0.18, 0.06, 0, 0, 0])
+            for i, (x, d) in enumerate([(1.5, -20), (5.0, 20)])]
+    bg, frames, labels = synthetic_sequence(cams, 4, np.random.default_rng(5))
+    png, video = tmp_path / "png", tmp_path / "video"
+    write_render_dir(png, cams, bg, frames, labels)
+    shutil.copytree(png, video)
+    for i, cam in enumerate(cams):
+        shutil.rmtree(video / "frames" / cam.name)
+        write(video / "frames" / f"{cam.name}.mkv", list(frames[:, i]))
+    a, b = RenderDir(png), RenderDir(video)
+    assert b.frame_names == a.frame_names and len(b) == 4
+    b.check_complete(4)
+    for i in (0, 1, 3, 2, 0, -1):
+        np.testing.assert_array_equal(b.frames(i), a.frames(i), err_msg=f"frame {i}")
+        np.testing.assert_array_equal(b.frames(i), frames[i])
+    b.close()
+    for n, problem in ((3, r"holds 3 frames; expected 4"), (5, r"holds more than 4 frames; expected 4, as masks/cam02 has")):
+        write(video / "frames" / "cam02.mkv", [frames[f % 4, 1] for f in range(n)])
+        with pytest.raises(ValueError, match=rf"^video: '.*video/frames/cam02.mkv' {problem}$"):
+            [RenderDir(video).frames(i) for i in range(4)]
+    (video / "frames" / "cam02.mkv").unlink()
+    with pytest.raises(ValueError, match=r"^DIR: .* lacks 1 file of its first 1 frame: frames/cam02.mkv$"):
+        RenderDir(video).check_complete(1)
