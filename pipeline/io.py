@@ -278,7 +278,9 @@ def image_files(folder: Path) -> list[Path]:
 
 def iter_video_frames(source: str | os.PathLike, name: str = "--video"):
     """Yield (H, W, 3) uint8 RGB frames of a video file or of a folder of images (in the
-    order of the numbers in their names, :func:`number_order`).
+    order of the numbers in their names, :func:`number_order`). A video is decoded by
+    :func:`testbed.lossless.read_video`: a truncated or corrupt one is a one-line ValueError
+    naming it, raised before a damaged frame would be yielded.
 
     name : what error messages start with: the option that gave ``source``.
     """
@@ -294,17 +296,11 @@ def iter_video_frames(source: str | os.PathLike, name: str = "--video"):
         if source.exists():
             raise ValueError(f"{name}: {str(source)!r} is neither a video file nor a folder of images")
         raise FileNotFoundError(f"{name}: no such file or folder {str(source)!r}")
-    cap = cv2.VideoCapture(str(source))
-    if not cap.isOpened():
-        raise ValueError(f"{name}: cannot open {str(source)!r} as a video")
-    try:
-        while True:
-            ok, frame = cap.read()
-            if not ok:
-                break
-            yield cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
-    finally:
-        cap.release()
+    from testbed.lossless import read_video
+
+    # ffmpeg with its errors checked (cv2.VideoCapture decoded a slice whose CRC failed as
+    # ffmpeg concealed it, and ended a truncated video early without a word): the same pixels
+    yield from read_video(source, name=name)
 
 
 def save_npz_atomic(path: str | os.PathLike, **arrays) -> None:

@@ -131,11 +131,12 @@ class VideoWriter:
             self._log.close()
 
 
-def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[np.ndarray]:
+def read_video(path: str | os.PathLike, frames: int | None = None, name: str = "video") -> Iterator[np.ndarray]:
     """Yield the (H, W, 3) uint8 RGB frames of a video written by :class:`VideoWriter`.
 
     A file ffmpeg cannot open, a slice whose CRC fails, a truncated file (and, given
-    ``frames``, another number of frames) is a one-line ValueError naming the file, raised
+    ``frames``, another number of frames) is a one-line ValueError naming the file (after
+    ``name``, what the messages start with: the file's role or the option that gave it), raised
     once the frames before it are yielded: a frame is yielded only while ffmpeg has
     reported no error (ffmpeg conceals a corrupt slice and goes on decoding; its message
     comes before the frame's bytes), so a corrupt frame never is, not even the first one
@@ -145,7 +146,7 @@ def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[n
     RGB bytes): each frame says its own size, so the file is not opened a second time to
     read it (that cost as much as decoding a few frames).
     """
-    path = check_input_file("video", path)
+    path = check_input_file(name, path)
     log = tempfile.TemporaryFile()  # noqa: SIM115 (closed in finally)
     proc = subprocess.Popen([ffmpeg_exe(), "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
                              "-f", "image2pipe", "-c:v", "ppm", "-pix_fmt", "rgb24", "-"],
@@ -179,14 +180,14 @@ def read_video(path: str | os.PathLike, frames: int | None = None) -> Iterator[n
         log.seek(0)
         if code != 0 or log.read().strip():
             if n == 0 and not held:
-                raise ValueError(f"video: cannot read {str(path)!r}: {_message(log)} "
+                raise ValueError(f"{name}: cannot read {str(path)!r}: {_message(log)} "
                                  "(not a video ffmpeg can open, or corrupt)")
-            raise ValueError(f"video: cannot read {str(path)!r} after {n} frames: {_message(log)} "
+            raise ValueError(f"{name}: cannot read {str(path)!r} after {n} frames: {_message(log)} "
                              "(truncated or corrupt)")
         if short:
-            raise ValueError(f"video: {str(path)!r}: frame {n} ends early")
+            raise ValueError(f"{name}: {str(path)!r}: frame {n} ends early")
         if frames is not None and n != frames:
-            raise ValueError(f"video: {str(path)!r} holds {n} frames; expected {frames}")
+            raise ValueError(f"{name}: {str(path)!r} holds {n} frames; expected {frames}")
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -205,3 +205,41 @@ def test_a_frame_of_another_size_is_named_in_a_folder_whose_numbers_are_unpadded
     with pytest.raises(ValueError, match=rf"^--video: {re.escape(str(folder / 'frame2.png'))} is 80 x 60 pixels"):
         camtask(["scanlines", "--video", str(folder), "--calibration", calib, "--background", "1",
                  "--out", str(tmp_path / "s.npz")])
+
+
+@pytest.mark.parametrize(("damage", "reason"), [
+    (lambda data: data[: len(data) * 2 // 3], "File ended prematurely"),
+    (lambda data: data[: len(data) // 2] + bytes([data[len(data) // 2] ^ 0xFF]) + data[len(data) // 2 + 1:],
+     "slice CRC mismatch"),
+])
+def test_a_truncated_or_corrupt_video_is_one_line_naming_it(render_dir, tmp_path, damage, reason, capfd):
+    """cv2.VideoCapture decoded a slice whose CRC failed as ffmpeg concealed it, and the run
+    ended with exit code 0 and scanlines of the damaged frame; a truncated video was
+    'has 1 frame; expected more than the 1 background frames'; both put ffmpeg's own lines,
+    pointer addresses and all, on stderr."""
+    import cv2
+
+    from testbed.lossless import VideoWriter
+
+    folder = render_dir / "frames" / "cam01"
+    images = [cv2.imread(str(p))[..., ::-1] for p in sorted(folder.iterdir())]
+    video = tmp_path / "cam01.mkv"
+    w = VideoWriter(video, images[0].shape[1], images[0].shape[0], 7.5)
+    for image in images:
+        w.write(image)
+    w.close()
+    out = tmp_path / "s.npz"
+    args = ["scanlines", "--video", str(video), "--calibration", str(render_dir / "calibration" / "cam01.yaml"),
+            "--background", "1", "--out", str(out), "--json"]
+    assert camtask(args) == 0                       # the sound video reads as its PNG frames do
+    with np.load(out) as z:
+        sound = z["scanlines"]
+    assert camtask(args[:2] + [str(folder)] + args[3:]) == 0
+    np.testing.assert_array_equal(np.load(out)["scanlines"], sound)
+    out.unlink()
+    capfd.readouterr()
+    video.write_bytes(damage(video.read_bytes()))
+    with pytest.raises(ValueError, match=rf"^--video: cannot read '{re.escape(str(video))}' after \d+ frames?: "
+                                         rf"{reason}.* \(truncated or corrupt\)$"):
+        camtask(args)
+    assert not out.exists() and " @ 0x" not in capfd.readouterr().err

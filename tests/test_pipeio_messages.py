@@ -67,7 +67,8 @@ def test_video_errors_name_the_option(tmp_path):
     with pytest.raises(ValueError, match=r"^--video: cannot read '.*bad/0.png'$"):
         next(iter_video_frames(tmp_path / "bad"))
     (tmp_path / "clip.mp4").write_text("not a video")
-    with pytest.raises(ValueError, match=r"^--video: cannot open '.*clip.mp4' as a video$"):
+    with pytest.raises(ValueError, match=r"^--video: cannot read '.*clip.mp4': Error opening input files: Invalid "
+                                         r"data found when processing input \(not a video ffmpeg can open, or corrupt\)$"):
         next(iter_video_frames(tmp_path / "clip.mp4"))
     os.mkfifo(tmp_path / "pipe")
     with pytest.raises(ValueError, match=r"^--video: '.*pipe' is neither a video file nor a folder of images$"):
