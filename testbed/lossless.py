@@ -132,7 +132,7 @@ class VideoWriter:
 
 
 def read_video(path: str | os.PathLike, frames: int | None = None, name: str = "video") -> Iterator[np.ndarray]:
-    """Yield the (H, W, 3) uint8 RGB frames of a video written by :class:`VideoWriter`.
+    """Yield the (H, W, 3) uint8 RGB frames of a video (by :class:`VideoWriter`, or any ffmpeg decodes).
 
     A file ffmpeg cannot open, a slice whose CRC fails, a truncated file (and, given
     ``frames``, another number of frames) is a one-line ValueError naming the file (after
@@ -140,7 +140,8 @@ def read_video(path: str | os.PathLike, frames: int | None = None, name: str = "
     once the frames before it are yielded: a frame is yielded only while ffmpeg has
     reported no error (ffmpeg conceals a corrupt slice and goes on decoding; its message
     comes before the frame's bytes), so a corrupt frame never is, not even the first one
-    that ``next(read_video(path))`` takes.
+    that ``next(read_video(path))`` takes. An ffmpeg that fails without a message (killed,
+    or no ffmpeg at all) is an OSError naming it, not the video.
 
     One ffmpeg decodes the file to PPM images (a header ``P6\\n<w> <h>\\n255\\n``, then the
     RGB bytes): each frame says its own size, so the file is not opened a second time to
@@ -148,7 +149,8 @@ def read_video(path: str | os.PathLike, frames: int | None = None, name: str = "
     """
     path = check_input_file(name, path)
     log = tempfile.TemporaryFile()  # noqa: SIM115 (closed in finally)
-    proc = subprocess.Popen([ffmpeg_exe(), "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
+    exe = ffmpeg_exe()
+    proc = subprocess.Popen([exe, "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
                              "-f", "image2pipe", "-c:v", "ppm", "-pix_fmt", "rgb24", "-"],
                             stdout=subprocess.PIPE, stderr=log, start_new_session=True)
     n, short, held = 0, False, False           # frames yielded; a frame read but not yielded
@@ -178,7 +180,11 @@ def read_video(path: str | os.PathLike, frames: int | None = None, name: str = "
             proc.kill()                         # its error is in the log: the frames after it are not wanted
         code = proc.wait()
         log.seek(0)
-        if code != 0 or log.read().strip():
+        said = log.read().strip()
+        if code != 0 and not said:              # killed (out of memory?) or broken: not the file's fault
+            status = f"was killed by signal {-code}" if code < 0 else f"failed with exit status {code}"
+            raise OSError(f"{name}: cannot read {str(path)!r}: ffmpeg ({exe}) {status} without a message")
+        if said:
             if n == 0 and not held:
                 raise ValueError(f"{name}: cannot read {str(path)!r}: {_message(log)} "
                                  "(not a video ffmpeg can open, or corrupt)")

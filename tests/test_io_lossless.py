@@ -144,3 +144,18 @@ def test_a_render_directory_of_videos_reads_as_its_png_twin(tmp_path):
     (video / "frames" / "cam02.mkv").unlink()
     with pytest.raises(ValueError, match=r"^DIR: .* lacks 1 file of its first 1 frame: frames/cam02.mkv$"):
         RenderDir(video).check_complete(1)
+
+
+@pytest.mark.parametrize(("script", "status"), [("exit 1", "failed with exit status 1"),
+                                                ("kill -9 $$", "was killed by signal 9")])
+def test_an_ffmpeg_that_fails_without_a_word_does_not_blame_the_video(tmp_path, monkeypatch, script, status):
+    """ffmpeg killed (out of memory) or broken said 'no message (not a video ffmpeg can open, or
+    corrupt)' of a sound video: a user would throw away good data."""
+    path = write(tmp_path / "v.mkv", clip(2))
+    fake = tmp_path / "ffmpeg"
+    fake.write_text(f"#!/bin/sh\n{script}\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+    with pytest.raises(OSError) as err:
+        list(read_video(path, 2))
+    assert str(err.value) == f"video: cannot read {str(path)!r}: ffmpeg ({fake}) {status} without a message"
