@@ -83,6 +83,22 @@ def disc_intervals(camera_xy, camera_yaw, centers, radii):
     return bearing - half, bearing + half
 
 
+def column_edges(bearings) -> np.ndarray:
+    """Edges of each column's angle: half a column step either side of its bearing, the
+    outer edges extrapolating the first and last steps (what :func:`scanline_intervals`
+    gives each column).
+
+    bearings : (n, W) float, radians, unwrapped (no jump of 2*pi along a row), W >= 2
+    Returns (n, W + 1) float, radians, in the order of the columns: column ``j`` spans
+    ``edges[:, j]`` to ``edges[:, j + 1]``.
+    """
+    b = np.asarray(bearings, dtype=float)
+    mid = 0.5 * (b[:, 1:] + b[:, :-1])
+    first = b[:, :1] - 0.5 * (b[:, 1:2] - b[:, :1])
+    last = b[:, -1:] + 0.5 * (b[:, -1:] - b[:, -2:-1])
+    return np.concatenate([first, mid, last], axis=1)
+
+
 def scanline_intervals(bearings, scanlines):
     """Field of view and occluded intervals of binary scanlines.
 
@@ -107,10 +123,7 @@ def scanline_intervals(bearings, scanlines):
     decreasing = step[:, 0] < 0
     b = np.where(decreasing[:, None], b[:, ::-1], b)
     occ = np.where(decreasing[:, None], scanlines[:, ::-1], scanlines)
-    mid = 0.5 * (b[:, 1:] + b[:, :-1])
-    first = b[:, :1] - 0.5 * (b[:, 1:2] - b[:, :1])
-    last = b[:, -1:] + 0.5 * (b[:, -1:] - b[:, -2:-1])
-    edges = np.concatenate([first, mid, last], axis=1)  # (n, W + 1), increasing
+    edges = column_edges(b)  # (n, W + 1), increasing
     yaw = 0.5 * (edges[:, 0] + edges[:, -1])
     fov = edges[:, -1] - edges[:, 0]
     n = b.shape[0]

@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 
 from scene import Scene
+from tasking.cones import column_edges
 
 BACKGROUND = (250, 250, 250)
 WALL = (60, 60, 60)
@@ -58,19 +59,18 @@ class TopView:
         shade = np.zeros((self.height, self.width), np.float32)
         for n, scan in zip(result.tasked, result.scanlines):
             c = xy[n - 1]
-            b = bearings[n]
+            edges = column_edges(np.unwrap(bearings[n])[None])[0]  # a field of view may cross +-pi (lab 6, 7)
             mask = np.zeros((self.height, self.width), np.uint8)
-            for lo, hi in _runs(scan):
-                run = np.unwrap(b[lo:hi])       # a field of view may cross +-pi (lab cameras 6, 7)
-                fan = np.linspace(run[0], run[-1], 8)
+            for lo, hi in _runs(scan):          # from the run's outer column edges, as the hull carves
+                fan = np.linspace(edges[lo], edges[hi], 8)
                 pts = np.vstack([c, c + reach * np.column_stack([np.cos(fan), np.sin(fan)])])
                 cv2.fillPoly(mask, [self.px(pts)], 1)
             shade += mask
         alpha = (0.5 * shade / max(len(result.tasked), 1) * self.inside)[..., None]
         img = (img * (1 - alpha) + np.array(CONE, np.float32) * alpha).astype(np.uint8)
         for n in result.tasked:                          # field-of-view edges
-            c, b = xy[n - 1], bearings[n]
-            for a in (b[0], b[-1]):
+            c, edges = xy[n - 1], column_edges(np.unwrap(bearings[n])[None])[0]
+            for a in (edges[0], edges[-1]):
                 cv2.line(img, tuple(self.px(c)), tuple(self.px(c + reach * np.array([np.cos(a), np.sin(a)]))),
                          CAMERA_OFF, 1, cv2.LINE_AA)
         img[self.inside == 0] = BACKGROUND              # cones and edges end at the walls

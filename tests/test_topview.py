@@ -91,3 +91,27 @@ def test_room_deeper_than_wide_fits_a_square(text):
     u, v = view.px(scene.room.vertices).T
     assert v.min() == view.margin and v.max() == view.height - view.margin   # the depth fills the height
     assert u.min() + u.max() == pytest.approx(view.width, abs=1)             # centred across
+
+
+def test_a_cone_spans_its_columns_edges_as_the_hull_carves_it():
+    """A run of occupied columns is shaded out to its outer column edges, half a column
+    beyond the outer bearings, as the hull carves it (tasking.cones.scanline_intervals):
+    drawn through the column centres, a one-column cone had no width at all."""
+    scene = load_scene("lab")
+    xy, yaw, fov = scene.floor_poses()
+    width = 10                                              # 4.9 degree columns: wide enough to see
+    b = yaw[0] + np.linspace(0.45, -0.45, width) * fov[0]   # decreasing left to right, as the pipeline gives
+    step = b[0] - b[1]
+    view = TopView(scene, width=400)
+    for j in (3, 4, 9):                                     # inner columns, and the last one at the fov edge
+        scan = np.zeros(width, bool)
+        scan[j] = True
+        img = view.draw(_frame(1, scan), {n: b for n in range(1, 17)}, title=" ")
+        for side in (-0.4, 0.4):                            # within the column, 3 m out
+            a = b[j] + side * step
+            u, v = view.px(xy[0] + 3.0 * np.array([np.cos(a), np.sin(a)]))
+            assert tuple(img[v, u]) != BACKGROUND, (j, side)
+        for side in (-0.7, 0.7):                            # beyond its edges: not the cone (no neighbour set)
+            a = b[j] + side * step
+            u, v = view.px(xy[0] + 3.0 * np.array([np.cos(a), np.sin(a)]))
+            assert tuple(img[v, u]) == BACKGROUND, (j, side)
