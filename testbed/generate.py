@@ -517,11 +517,12 @@ def check_worker_versions(client) -> None:
 
 
 def check_workers_share(client, out: Path, patience: float = 10.0) -> None:
-    """Refuse a cluster with a worker that does not see ``out`` at the same path: it would
-    write its episodes where this process never finds them. A file with a random token is
-    written into ``out`` and read back on every worker, for up to ``patience`` seconds (a
-    network file system may show a new file to other machines a little later). One line
-    naming the first such worker.
+    """Refuse a cluster with a worker that does not see ``out`` at the same path, or cannot
+    write there: it would write its episodes where this process never finds them, or fail
+    each one it takes. A file with a random token is written into ``out`` and read back on
+    every worker, which also creates and removes a file beside it, for up to ``patience``
+    seconds (a network file system may show a new file to other machines a little later).
+    One line naming the first such worker.
     """
     import secrets
 
@@ -532,8 +533,13 @@ def check_workers_share(client, out: Path, patience: float = 10.0) -> None:
     try:
         deadline = time.monotonic() + patience
         while True:
-            blind = sorted(w for w, seen in client.run(_read_text, str(probe)).items() if seen != token)
+            views = sorted(client.run(_worker_view, str(probe)).items())
+            blind = [w for w, (seen, _) in views if seen != token]
             if not blind:
+                for worker, (_, why) in views:
+                    if why is not None:
+                        raise ValueError(f"--scheduler: worker {worker} cannot write to {folder} ({why}); --out "
+                                         "must be a folder that every worker can write to")
                 return
             if time.monotonic() >= deadline:
                 raise ValueError(f"--scheduler: worker {blind[0]} does not see {folder}; --out must be a folder "
@@ -549,6 +555,24 @@ def _read_text(path: str) -> str | None:
         return Path(path).read_text()
     except OSError:
         return None
+
+
+def _worker_view(path: str) -> tuple[str | None, str | None]:
+    """The text of the probe ``path`` on the worker that runs this (None when it cannot read
+    it), and why it cannot create a file beside it (None when it can: it made and removed one,
+    named as ``path`` and a random suffix, so that no two workers share it)."""
+    import secrets
+
+    text = _read_text(path)
+    if text is None:
+        return None, None
+    mine = f"{path}.{secrets.token_hex(6)}"
+    try:
+        os.close(os.open(mine, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644))
+        os.unlink(mine)
+    except OSError as exc:
+        return text, exc.strerror or str(exc)
+    return text, None
 
 
 def version_changes(a: dict, b: dict, a_name: str, b_name: str) -> str:

@@ -256,8 +256,8 @@ def test_workers_that_do_not_see_the_output_folder_are_refused(tmp_path):
         def __init__(self, *sees):
             self.sees = sees
 
-        def run(self, fn, *args):
-            return {f"tcp://10.0.0.{i}:1": fn(*args) if sees else None for i, sees in enumerate(self.sees)}
+        def run(self, fn, path):                    # a worker that does not see it finds no file there
+            return {f"tcp://10.0.0.{i}:1": fn(path if sees else f"{path}.elsewhere") for i, sees in enumerate(self.sees)}
 
     check_workers_share(Cluster(True, True), tmp_path)
     with pytest.raises(ValueError) as err:
@@ -270,6 +270,34 @@ def test_workers_that_do_not_see_the_output_folder_are_refused(tmp_path):
     (tmp_path / f"{PROBE}0123").write_text("left by a killed run")
     check_out(tmp_path)                             # not content: not "exists and is not empty"
     assert _read_text(str(tmp_path / "none")) is None
+
+
+def test_workers_that_cannot_write_the_output_folder_are_refused(tmp_path, monkeypatch):
+    """A worker that sees --out but cannot write there (a read-only mount, another user on
+    the shared disk) failed every episode it took, after the run had started, with a bare
+    "[Errno 30] Read-only file system: '.../.episode_0000.<random>.tmp'" and "--resume
+    finishes the run"; it is refused before any work, as a worker that does not see it."""
+    import errno
+
+    from testbed.generate import check_workers_share
+
+    def read_only(*args, **kwargs):
+        raise OSError(errno.EROFS, "Read-only file system")
+
+    class Cluster:                                  # client.run(f, *args): f's result on every worker
+        def run(self, fn, *args):
+            first = fn(*args)
+            with monkeypatch.context() as m:        # the second worker's mount is read-only
+                m.setattr(os, "open", read_only)
+                m.setattr(os, "mkdir", read_only)
+                second = fn(*args)
+            return {"tcp://10.0.0.0:1": first, "tcp://10.0.0.1:1": second}
+
+    with pytest.raises(ValueError) as err:
+        check_workers_share(Cluster(), tmp_path, patience=0.6)
+    assert str(err.value) == (f"--scheduler: worker tcp://10.0.0.1:1 cannot write to {tmp_path} (Read-only file "
+                              "system); --out must be a folder that every worker can write to")
+    assert list(tmp_path.iterdir()) == []           # no probe left
 
 
 def test_out_inside_an_episode_of_a_dataset_is_refused(tmp_path, capsys):
