@@ -689,6 +689,7 @@ def _generate_on_dask(client, config: EpisodeConfig, out: Path, todo: Iterator[i
             ready.clear()                   # an episode ending from here on wakes the wait below
             for index in [i for i, f in pending.items() if f.done()]:
                 entry, host, secs = pending[index].result()    # re-raises the episode's error
+                check_written_here(out, entry, host)
                 finished(entry, host, secs)
                 del pending[index]
                 show(index, entry["frames"])
@@ -702,6 +703,33 @@ def _generate_on_dask(client, config: EpisodeConfig, out: Path, todo: Iterator[i
     finally:
         for f in pending.values():
             f.cancel()
+
+
+#: Seconds an episode folder that a worker has renamed into place may take to show here (a
+#: network file system), as for :func:`check_workers_share`.
+SHARE_PATIENCE = 10.0
+
+
+class NotShared(Exception):
+    """An episode that a worker wrote where this process does not see it."""
+
+
+def check_written_here(out: Path, entry: dict, host: str) -> None:
+    """Raise :class:`NotShared` unless the episode folder of ``entry``, which a worker on
+    ``host`` has finished, shows in ``out`` within :data:`SHARE_PATIENCE` seconds.
+
+    :func:`check_workers_share` checks the workers of the cluster when the run starts; one
+    that joins later (an adaptive cluster adding nodes, each with its own ``/scratch``) writes
+    to its own disk, and its episodes were listed though no folder of them is in ``out``.
+    """
+    folder = Path(out).absolute() / entry["name"]
+    deadline = time.monotonic() + SHARE_PATIENCE
+    while not folder.is_dir():
+        if time.monotonic() >= deadline:
+            raise NotShared(f"episode {entry['index']}: a worker on {host} wrote it where this machine does not see "
+                            f"it (no {folder} here after {SHARE_PATIENCE:g} s); --out must be a folder that every "
+                            "worker shares, at the same path (a worker that joined the cluster after the run started?)")
+        time.sleep(0.1)
 
 
 def earlier_runs(out: Path) -> list[dict]:

@@ -1,7 +1,10 @@
 """camtask render: bad input gives one line and exit code 2 before any work starts."""
 
+import json
 import os
 import shutil
+import socket
+from pathlib import Path
 
 import pytest
 
@@ -575,53 +578,96 @@ def test_episode_config_refuses_an_unknown_format():
     assert {EpisodeConfig("lab", None, None, 4, 1, f).fmt for f in FORMATS} == set(FORMATS)
 
 
+class FakeFuture:
+    """A Dask future of ``fn(*args)``, done at the second look, computed when asked for."""
+
+    def __init__(self, fn, args):
+        self.fn, self.args, self.polls = fn, args, 0
+
+    def add_done_callback(self, callback):
+        pass
+
+    def done(self):
+        self.polls += 1
+        return self.polls > 1
+
+    def result(self):
+        return self.fn(*self.args)
+
+    def cancel(self):
+        pass
+
+
+class FakeClient:
+    """A cluster of two one-thread workers that computes each task in this process."""
+
+    def __init__(self):
+        self.submitted, self.most = [], 0
+
+    def nthreads(self):
+        return {"tcp://worker-1": 1, "tcp://worker-2": 1}
+
+    def submit(self, fn, *args, pure, key):
+        self.submitted.append(FakeFuture(fn, args))
+        self.most = max(self.most, sum(not f.polls > 1 for f in self.submitted))
+        return self.submitted[-1]
+
+
+def fake_episode(config, index, out, seconds=None):
+    """render_episode, minus the rendering: the (empty) episode folder and its entry."""
+    (Path(out) / f"episode_{index:04d}").mkdir()
+    return {"index": index, "name": f"episode_{index:04d}", "seed": config.seed, "spawn_key": [index],
+            "frames": config.frames, "files": {}}
+
+
 def test_dask_runs_keep_a_few_episodes_submitted_not_all(tmp_path, monkeypatch):
     """--episodes 200000 submitted at once slowed rendering tenfold; 10**12 filled the memory."""
     from pipeline import load_params
     from testbed import generate as gen
     from testbed.episodes import EpisodeConfig
 
-    class Future:
-        def __init__(self, fn, args):
-            self.fn, self.args, self.polls = fn, args, 0
-
-        def add_done_callback(self, callback):
-            pass
-
-        def done(self):                                     # done at the second look
-            self.polls += 1
-            return self.polls > 1
-
-        def result(self):
-            return self.fn(*self.args)
-
-        def cancel(self):
-            pass
-
-    class Client:
-        def __init__(self):
-            self.submitted, self.most = [], 0
-
-        def nthreads(self):
-            return {"tcp://worker-1": 1, "tcp://worker-2": 1}
-
-        def submit(self, fn, *args, pure, key):
-            self.submitted.append(Future(fn, args))
-            self.most = max(self.most, sum(not f.polls > 1 for f in self.submitted))
-            return self.submitted[-1]
-
-    def episode(config, index, out, seconds=None):
-        return {"index": index, "name": f"episode_{index:04d}", "seed": config.seed, "spawn_key": [index],
-                "frames": config.frames, "files": {}}
-
     config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
     out = tmp_path / "data"
     gen.prepare_output(out, config, 30, False, False)
-    monkeypatch.setattr(gen, "render_episode", episode)
-    client = Client()
+    monkeypatch.setattr(gen, "render_episode", fake_episode)
+    client = FakeClient()
     done = gen.generate(config, 30, out, {}, client)
     assert sorted(done) == list(range(30)) and len(client.submitted) == 30
     assert client.most == 4 == gen.in_flight(client)         # two per worker thread, at least 4
+
+
+def test_an_episode_written_where_this_machine_does_not_see_it_is_not_listed(tmp_path, monkeypatch, capsys):
+    """A worker that joins an existing cluster after the check that every worker shares --out
+    (an adaptive cluster adding nodes, each with its own /scratch) wrote its episodes to its
+    own disk: they were listed in the manifest, the run said "wrote 30 episodes (30/30
+    finished)", exit 0, and `camtask verify` found the folders missing. Now the run stops
+    in one line at the first such episode, which stays unlisted."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.commands.render import machine_error
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    elsewhere = tmp_path / "another machine" / "data"
+    elsewhere.mkdir(parents=True)
+    gen.prepare_output(out, config, 6, False, False)
+
+    def episode(config, index, out, seconds=None):       # episode 3 goes to the worker that joined late
+        return fake_episode(config, index, elsewhere if index == 3 else out, seconds)
+
+    monkeypatch.setattr(gen, "render_episode", episode)
+    monkeypatch.setattr(gen, "SHARE_PATIENCE", 0.3)
+    with pytest.raises(gen.NotShared) as err:
+        gen.generate(config, 6, out, {}, FakeClient())
+    host = socket.gethostname()
+    assert str(err.value) == (f"episode 3: a worker on {host} wrote it where this machine does not see it "
+                              f"(no {out.absolute() / 'episode_0003'} here after 0.3 s); --out must be a folder "
+                              "that every worker shares, at the same path (a worker that joined the cluster "
+                              "after the run started?)")
+    assert machine_error(err.value) == str(err.value)          # one line, the finished episodes named after it
+    listed = [e["index"] for e in json.loads((out / "manifest.json").read_text())["episodes"]]
+    assert 3 not in listed and listed == sorted(listed) and all((out / f"episode_{i:04d}").is_dir() for i in listed)
 
 
 def test_params_that_cannot_give_a_picture_are_refused_before_any_work(tmp_path, capsys):

@@ -268,8 +268,11 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
 
 def machine_error(exc: BaseException, scheduler: str | None = None) -> str | None:
     """One line for an error of the machine rather than a bug: an OSError, a Dask episode
-    whose workers kept dying (``KilledWorker``, whose own text is a paragraph), or the lost
-    connection to an existing cluster's ``scheduler``; else None."""
+    whose workers kept dying (``KilledWorker``, whose own text is a paragraph), an episode
+    written where this machine does not see it (``NotShared``), or the lost connection to an
+    existing cluster's ``scheduler``; else None."""
+    from testbed.generate import NotShared, episode_of_key
+
     if scheduler is not None and "distributed" in sys.modules:
         from distributed.client import FutureCancelledError
         from distributed.comm.core import CommClosedError
@@ -278,13 +281,11 @@ def machine_error(exc: BaseException, scheduler: str | None = None) -> str | Non
             reason = getattr(exc, "reason", None) or type(exc).__name__
             return (f"--scheduler: lost the connection to {scheduler} ({reason}); episodes running on its "
                     "workers may still finish into temporary folders")
-    if isinstance(exc, OSError):
+    if isinstance(exc, (OSError, NotShared)):
         return str(exc)
     if "distributed" not in sys.modules:          # no cluster was used
         return None
     from distributed import KilledWorker
-
-    from testbed.generate import episode_of_key
 
     if not isinstance(exc, KilledWorker):
         return None
