@@ -261,13 +261,36 @@ def check_scheduler(address: str, timeout: float) -> None:
         reply = asyncio.run(asyncio.wait_for(identity(), timeout))
     except _BadAddress as exc:
         raise ValueError(f"scheduler: cannot use the address {address} ({exc})") from None
-    except (TimeoutError, OSError) as exc:
-        why = str(exc).splitlines()[0] if str(exc) else f"no answer within {timeout:g} s"
+    except (TimeoutError, OSError):
+        why = _why_unreachable(address)
+        why = f"{why}; tried for {timeout:g} s" if why else f"no answer within {timeout:g} s"
         raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({why})") from None
     except Exception as exc:  # noqa: BLE001 - whatever the other end sent, it was not Dask's answer
         raise ValueError(f"scheduler: {address} is not a Dask scheduler ({type(exc).__name__})") from None
     if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
         raise ValueError(f"scheduler: {address} is not a Dask scheduler (it answered {str(reply)[:60]!r})")
+
+
+def _why_unreachable(address: str, timeout: float = 1.0) -> str | None:
+    """Why a TCP connection to ``address`` fails now ("Connection refused", "Name or service
+    not known"), or None (it connects, or times out). Dask retries such a connection until
+    its timeout and then says "Timed out trying to connect", or its last attempt was cut
+    short and the reason lost: a typo in a host name read as a firewall dropping packets."""
+    import socket
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    scheme, location = parse_address(address)
+    if scheme not in ("tcp", "tls", "ws", "wss"):
+        return None
+    host, port = parse_host_port(location)
+    if not 0 < port < 65536:                # the resolver takes it modulo 65536
+        return f"port {port} is not in 1..65535"
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            return None
+    except OSError as exc:
+        return exc.strerror                 # None for a time-out
 
 
 def run_tasks(

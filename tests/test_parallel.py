@@ -107,6 +107,32 @@ def test_a_port_that_is_not_a_dask_scheduler_is_one_line(answer, message):
         server.close()
 
 
+def test_an_unreachable_scheduler_says_why():
+    """Nothing listening, or a host name that does not resolve (a typo), was reported as "Timed
+    out trying to connect ... after 5 s" or "no answer within 5 s", as if a firewall dropped
+    the packets: Dask retries such a connection until its timeout, and the reason was lost."""
+    import socket
+
+    from testbed.parallel import check_scheduler
+
+    with socket.create_server(("127.0.0.1", 0)) as server:
+        port = server.getsockname()[1]              # closed again: nothing listens there
+    with pytest.raises(ValueError) as info:
+        check_scheduler(f"tcp://127.0.0.1:{port}", 1.0)
+    assert str(info.value) == (f"scheduler: cannot reach a Dask scheduler at tcp://127.0.0.1:{port} "
+                               "(Connection refused; tried for 1 s)")
+    try:
+        socket.getaddrinfo("camtask-no-such-host.invalid", 8786)
+    except socket.gaierror as exc:
+        why = exc.strerror                          # "Name or service not known", or no DNS at all
+    else:
+        pytest.skip("this machine's resolver answers for a .invalid name")
+    with pytest.raises(ValueError) as info:
+        check_scheduler("tcp://camtask-no-such-host.invalid:8786", 1.0)
+    assert str(info.value) == ("scheduler: cannot reach a Dask scheduler at tcp://camtask-no-such-host.invalid:8786 "
+                               f"({why}; tried for 1 s)")
+
+
 @pytest.mark.skipif(shutil.which("openssl") is None, reason="needs openssl for a self-signed certificate")
 def test_a_tls_scheduler_set_up_in_the_dask_config_passes_the_check(tmp_path):
     """The check connects as Client does, with the Dask config's TLS settings."""
