@@ -672,10 +672,19 @@ def _generate_on_dask(client, config: EpisodeConfig, out: Path, todo: Iterator[i
     # slowed rendering tenfold (and took minutes to cancel), 10**12 filled the memory.
     pending: dict = {}
     shown: dict[int, int] = {}              # frames counted per episode so far
+    alone = False                           # no worker at the last look (said once, until one comes)
 
     def top_up() -> None:
-        for i in itertools.islice(todo, max(0, in_flight(client) - len(pending))):
+        nonlocal alone
+        threads = client.nthreads()
+        for i in itertools.islice(todo, max(0, in_flight(client, threads) - len(pending))):
             pending[i], shown[i] = submit(i), 0
+        if pending and not threads and not alone:      # an existing cluster's workers all gone
+            from tqdm import tqdm
+
+            tqdm.write(f"warning: no Dask worker is left in the cluster at {client.scheduler.address}; "
+                       f"{len(pending)} episodes wait for one (Ctrl-C stops)", file=sys.stderr)   # over the bar
+        alone = not threads
 
     def show(index: int, frames: int) -> None:
         if progress is not None and frames > shown[index]:
@@ -763,11 +772,11 @@ def frames_in_progress(out: Path) -> dict[int, int]:
     return counts
 
 
-def in_flight(client) -> int:
+def in_flight(client, threads: dict | None = None) -> int:
     """How many episodes to keep submitted to ``client``: two per worker thread (one running,
     one queued, so no thread waits for the next submission), at least 4 (no worker has
-    joined an external scheduler yet)."""
-    return max(4, 2 * sum(client.nthreads().values()))
+    joined an external scheduler yet). threads : ``client.nthreads()``, if known."""
+    return max(4, 2 * sum((client.nthreads() if threads is None else threads).values()))
 
 
 def episode_key(index: int) -> str:

@@ -636,6 +636,35 @@ def test_dask_runs_keep_a_few_episodes_submitted_not_all(tmp_path, monkeypatch):
     assert client.most == 4 == gen.in_flight(client)         # two per worker thread, at least 4
 
 
+def test_a_cluster_that_loses_every_worker_says_so_once(tmp_path, monkeypatch, capsys):
+    """An existing cluster whose workers all went (a batch system's time limit, the whole
+    `dask worker` killed) left the run waiting without a word, its progress bar still."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    class Client(FakeClient):
+        scheduler = type("Rpc", (), {"address": "tcp://10.0.0.5:8786"})
+
+        def __init__(self, workers):
+            super().__init__()
+            self.workers = list(workers)        # True: the cluster has its workers at that look
+
+        def nthreads(self):
+            return super().nthreads() if self.workers.pop(0) else {}
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 10, False, False)
+    monkeypatch.setattr(gen, "render_episode", fake_episode)
+    capsys.readouterr()
+    done = gen.generate(config, 10, out, {}, Client([True, False, False, True, False, True, True]))
+    assert sorted(done) == list(range(10))
+    warning = "warning: no Dask worker is left in the cluster at tcp://10.0.0.5:8786; {} episodes wait for one " \
+              "(Ctrl-C stops)"
+    assert capsys.readouterr().err.splitlines() == [warning.format(4), warning.format(2)]   # once per time
+
+
 def test_an_episode_written_where_this_machine_does_not_see_it_is_not_listed(tmp_path, monkeypatch, capsys):
     """A worker that joins an existing cluster after the check that every worker shares --out
     (an adaptive cluster adding nodes, each with its own /scratch) wrote its episodes to its

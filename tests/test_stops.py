@@ -45,11 +45,11 @@ def test_the_render_loop_checks(tmp_path, monkeypatch):
     real = generate.in_flight
     calls = []
 
-    def in_flight(client):                      # called in the loop, after each finished episode is dropped
+    def in_flight(client, *threads):            # called in the loop, after each finished episode is dropped
         calls.append(1)
         if len(calls) == 2:
             _Dropped(signal.SIGINT)
-        return real(client)
+        return real(client, *threads)
 
     monkeypatch.setattr(generate, "in_flight", in_flight)
     before = signal.signal(signal.SIGINT, signal.default_int_handler)
