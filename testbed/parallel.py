@@ -262,6 +262,8 @@ def check_scheduler(address: str, timeout: float) -> None:
     except _BadAddress as exc:
         raise ValueError(f"scheduler: cannot use the address {address} ({exc})") from None
     except (TimeoutError, OSError):
+        if (port := _port(address)) is not None and not 0 < port < 65536:   # the resolver takes it modulo 65536
+            raise ValueError(f"scheduler: cannot use the address {address} (port {port} is not in 1..65535)") from None
         why = _why_unreachable(address)
         why = f"{why}; tried for {timeout:g} s" if why else f"no answer within {timeout:g} s"
         raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({why})") from None
@@ -269,6 +271,14 @@ def check_scheduler(address: str, timeout: float) -> None:
         raise ValueError(f"scheduler: {address} is not a Dask scheduler ({type(exc).__name__})") from None
     if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
         raise ValueError(f"scheduler: {address} is not a Dask scheduler (it answered {str(reply)[:60]!r})")
+
+
+def _port(address: str) -> int | None:
+    """The port of a TCP-based Dask ``address`` (tcp, tls, ws, wss), else None."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    scheme, location = parse_address(address)
+    return parse_host_port(location)[1] if scheme in ("tcp", "tls", "ws", "wss") else None
 
 
 def _why_unreachable(address: str, timeout: float = 1.0) -> str | None:
@@ -280,12 +290,9 @@ def _why_unreachable(address: str, timeout: float = 1.0) -> str | None:
 
     from distributed.comm.addressing import parse_address, parse_host_port
 
-    scheme, location = parse_address(address)
-    if scheme not in ("tcp", "tls", "ws", "wss"):
+    if _port(address) is None:
         return None
-    host, port = parse_host_port(location)
-    if not 0 < port < 65536:                # the resolver takes it modulo 65536
-        return f"port {port} is not in 1..65535"
+    host, port = parse_host_port(parse_address(address)[1])
     try:
         with socket.create_connection((host, port), timeout=timeout):
             return None

@@ -107,6 +107,16 @@ def test_a_port_that_is_not_a_dask_scheduler_is_one_line(answer, message):
         server.close()
 
 
+def test_a_port_out_of_range_is_a_bad_address_not_an_unreachable_one():
+    """Dask's resolver takes a port modulo 65536 (99999 -> 34463): refused as an address that
+    cannot be used, not reported as a scheduler tried for the whole timeout."""
+    from testbed.parallel import check_scheduler
+
+    with pytest.raises(ValueError) as info:
+        check_scheduler("tcp://127.0.0.1:99999", 1.0)
+    assert str(info.value) == "scheduler: cannot use the address tcp://127.0.0.1:99999 (port 99999 is not in 1..65535)"
+
+
 def test_an_unreachable_scheduler_says_why():
     """Nothing listening, or a host name that does not resolve (a typo), was reported as "Timed
     out trying to connect ... after 5 s" or "no answer within 5 s", as if a firewall dropped
