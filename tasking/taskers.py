@@ -396,7 +396,7 @@ def choose_cameras(
     m : cameras swapped per incremental update, 1 <= m <= k
     uniform_sets : mapping k -> k 0-based indices for the uniform tasker (e.g. the lab's
         paper lists); without an entry, ``uniform_select(N, k)``
-    max_subsets : the optimal tasker refuses when C(N, k) exceeds this
+    max_subsets : int >= 1; the optimal tasker refuses when C(N, k) exceeds this
     rng : numpy Generator seeding k-means (clustering); None -> seed 0
 
     Returns
@@ -408,6 +408,7 @@ def choose_cameras(
     n = camera_xy.shape[0]
     k = check_int("k", k, 1, n)
     m = check_int("m", m, 1, k)
+    max_subsets = check_int("max_subsets", max_subsets, 1)
     estimates = check_points("estimates", estimates, allow_empty=True)
     check_radii("radius", radius, estimates.shape[0])
     if rng is not None and not isinstance(rng, np.random.Generator):

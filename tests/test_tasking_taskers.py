@@ -399,6 +399,13 @@ EST = np.array([[0.2, 0.0], [-0.3, 0.1]])
         ("optimal", 3, {"max_subsets": 10}, r"max_subsets: optimal needs C\(6, 3\) = 20"),
         ("uniform", 2, {"uniform_sets": {2: [0, 0]}}, r"uniform_sets\[2\] must not repeat"),
         ("clustering", 2, {"rng": 3}, "rng must be a numpy Generator"),
+        # docs/tasking.md lists max_subsets among the validated parameters: None or a string
+        # ended in "TypeError: '>' not supported", 2.5 and True were compared as numbers
+        ("optimal", 3, {"max_subsets": None}, "max_subsets must be an integer; got None"),
+        ("optimal", 3, {"max_subsets": "100"}, "max_subsets must be an integer; got '100'"),
+        ("optimal", 3, {"max_subsets": 2.5}, "max_subsets must be an integer; got 2.5"),
+        ("optimal", 3, {"max_subsets": 0}, "max_subsets must be >= 1; got 0"),
+        ("greedy", 3, {"max_subsets": None}, "max_subsets must be an integer; got None"),
     ],
 )
 def test_choose_errors(tasker, k, kwargs, match):
