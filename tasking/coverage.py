@@ -107,8 +107,10 @@ def subset_areas(cov: Coverage, subsets) -> np.ndarray:
 def optimal_subset(cov: Coverage, k: int, tol: float = 0.0) -> list:
     """The k-subset with the smallest hull area (ties: first in lexicographic order).
 
-    Scores within ``tol`` (m^2) of the best so far count as tied, so summation noise
-    (~1e-13 m^2 between symmetric subsets) does not pick the winner.
+    Scores within ``tol`` (m^2) of the smallest count as tied, so summation noise
+    (~1e-13 m^2 between symmetric subsets) does not pick the winner. Subsets are scored in
+    blocks of ``CHUNK``; the smallest score is known only at the end, so the first block
+    holding a subset within ``tol`` of it is scored again to find that subset.
 
     Returns
     -------
@@ -119,22 +121,25 @@ def optimal_subset(cov: Coverage, k: int, tol: float = 0.0) -> list:
     keep = cov.masks.sum(axis=1) < n - k + 1
     masks, areas = cov.masks[keep], cov.areas[keep]
     kept = Coverage(masks, areas)
-    combos = itertools.combinations(range(n), k)
-    best_area, best = np.inf, None
     if n <= 63:
         bits = (masks.astype(np.uint64) << np.arange(n, dtype=np.uint64)).sum(axis=1)
         weights = np.left_shift(np.uint64(1), np.arange(n, dtype=np.uint64))
-    while True:
-        block = np.array(list(itertools.islice(combos, CHUNK)), dtype=np.intp).reshape(-1, k)
-        if block.shape[0] == 0:
-            break
-        if n <= 63:
-            sub_bits = weights[block].sum(axis=1)
-            uncovered = (sub_bits[:, None] & bits[None, :]) == 0  # (C, U)
-            scores = uncovered @ areas
-        else:
-            scores = subset_areas(kept, block)
-        i = int(np.flatnonzero(scores <= scores.min() + tol)[0])
-        if scores[i] < best_area - tol:
-            best_area, best = float(scores[i]), block[i].tolist()
-    return best
+    chunk = CHUNK
+
+    def block(combos):
+        return np.array(list(itertools.islice(combos, chunk)), dtype=np.intp).reshape(-1, k)
+
+    def scores(subsets):
+        if n > 63:
+            return subset_areas(kept, subsets)
+        sub_bits = weights[subsets].sum(axis=1)
+        return ((sub_bits[:, None] & bits[None, :]) == 0) @ areas       # (C, U) uncovered cells
+
+    combos = itertools.combinations(range(n), k)
+    mins = []
+    while (subsets := block(combos)).shape[0]:
+        mins.append(scores(subsets).min())
+    best = min(mins) + tol
+    first = next(b for b, s in enumerate(mins) if s <= best)
+    subsets = block(itertools.islice(itertools.combinations(range(n), k), first * chunk, None))
+    return subsets[int(np.flatnonzero(scores(subsets) <= best)[0])].tolist()

@@ -643,3 +643,19 @@ def test_optimal_subset_beyond_63_cameras_is_the_smallest_table_area():
     scores = subset_areas(cov, subsets)
     got = optimal_subset(cov, 2)
     assert subset_areas(cov, [got])[0] == pytest.approx(scores.min(), abs=1e-12)
+
+
+@pytest.mark.parametrize("chunk", [1, 2, 4096])
+def test_optimal_subset_is_the_first_within_tol_of_the_smallest_whatever_the_blocks(monkeypatch, chunk):
+    """Single-camera subsets scoring 1 + 5 tol, 1, 1 - 0.8 tol and 1 - 1.5 tol: the smallest is
+    the last, the first within tol of it the third. Ties were judged against the best of the
+    blocks scored so far, so the answer hung on CHUNK: 1 gave the last, 2 the second (1.5 tol
+    above the smallest, outside the documented tie), one block the third."""
+    from tasking import coverage
+    from tasking.coverage import Coverage, optimal_subset
+
+    monkeypatch.setattr(coverage, "CHUNK", chunk)
+    tol = 1e-9
+    masks = ~np.eye(4, dtype=bool)                 # cell c is left uncovered by camera c alone
+    cov = Coverage(masks, np.array([1.0 + 5 * tol, 1.0, 1.0 - 0.8 * tol, 1.0 - 1.5 * tol]))
+    assert optimal_subset(cov, 1, tol=tol) == [2]
