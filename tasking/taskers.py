@@ -9,7 +9,8 @@ object centres. The hull of a set S is ``room - union(wedges[S])``, so
 * the removed area is a coverage function (monotone, submodular): gains only shrink as
   H shrinks, which is what lazy (CELF) greedy relies on.
 
-Greedy and lazy greedy compute gains with the same GEOS operation on the same hull, so
+Greedy and lazy greedy compute gains with the same operation on the same hull (the
+triangle fan of :mod:`tasking.fan` when given the wedge table, else a GEOS overlay), so
 they see identical floating-point numbers and make the identical choice: gains within
 ``LAZY_TOL`` of the room's area of the largest count as tied, and the lowest camera
 index goes (as in removals and the fan-table path), so overlay rounding cannot decide.
@@ -326,8 +327,8 @@ def incremental_select_convex(camera_xy, cones, room: Polygon, room_xy, current,
     area(room) - area(room ∩ ⋃ wedges[T])``, exact to ~1e-12 of the room's area), all
     candidate sets of a round in one numpy call. Removal: the same rule as
     :func:`greedy_remove` (smallest hull; within ``LAZY_TOL * room.area`` the lowest
-    index). Adding: the largest gain, within ``LAZY_TOL * room.area`` the lowest index
-    (lazy greedy takes the larger of two such near-equal gains; both are greedy choices).
+    index). Adding: the largest gain, within ``LAZY_TOL * room.area`` the lowest index,
+    as lazy greedy in :func:`incremental_select`.
 
     Parameters
     ----------
