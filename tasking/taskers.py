@@ -38,7 +38,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-from .checks import check_choice, check_indices, check_int, check_points, check_radii
+from .checks import check_choice, check_indices, check_int, check_points, check_radii, check_room
 from .clustering import clustering_select, pair_axes
 from .cones import wedge_radius
 from .coverage import coverage_cells, optimal_subset
@@ -416,8 +416,9 @@ def choose_cameras(
         raise ValueError(f"rng must be a numpy Generator or None; got {type(rng).__name__}")
     if current is not None:
         current = check_indices("current", current, n, size=k)
+    room = check_room(room)
     room_xy = convex_ring(room) if tasker == "incremental" and current is not None else None
-    # all geometry validation (yaw, fov, room, finite values) happens here
+    # the rest of the geometry validation (yaw, fov, finite values) happens here
     wedges, cones = free_wedges_from_discs(camera_xy, camera_yaw, fov, estimates, radius,
                                            room, strict=False, return_cones=True,
                                            polygons=room_xy is None)

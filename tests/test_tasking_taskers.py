@@ -430,6 +430,16 @@ def test_choose_input_errors(args, match):
         choose_cameras("greedy", 2, **base)
 
 
+@pytest.mark.parametrize("room", ["lab", 5, None])
+def test_incremental_refuses_a_room_that_is_not_a_polygon_like_the_others(room):
+    """With a current set the incremental tasker looked for a convex room before the room was
+    checked: a string or a number ended in shapely's 'TypeError: One of the arguments is of
+    incorrect type' where every other tasker says what room must be."""
+    for tasker in TASKERS:
+        with pytest.raises(ValueError, match="room must be a shapely Polygon"):
+            choose_cameras(tasker, 2, XY, YAW, np.pi, EST, R, room, current=[0, 1])
+
+
 def test_incremental_tasker_errors():
     with pytest.raises(ValueError, match="update_every must be >= 1"):
         IncrementalTasker(3, 1, 0)
