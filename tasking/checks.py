@@ -37,6 +37,20 @@ __all__ = [
 ]
 
 
+def _floats(name: str, value) -> np.ndarray:
+    """``np.asarray(value, dtype=float)``, its conversion errors naming ``name``.
+
+    >>> _floats("fov", "wide")
+    Traceback (most recent call last):
+        ...
+    ValueError: fov must be numbers (an array of floats); got str
+    """
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers (an array of floats); got {type(value).__name__}") from None
+
+
 def check_points(name: str, points, *, allow_empty: bool = False) -> np.ndarray:
     """Convert to a ``(n, 2)`` float array of finite coordinates.
 
@@ -47,7 +61,7 @@ def check_points(name: str, points, *, allow_empty: bool = False) -> np.ndarray:
         ...
     ValueError: centers must have shape (n, 2); got shape (3,)
     """
-    arr = np.asarray(points, dtype=float)
+    arr = _floats(name, points)
     if arr.ndim == 2 and arr.shape[0] == 0 and allow_empty:
         return arr.reshape(0, 2)
     if arr.ndim == 1 and arr.size == 0 and allow_empty:
@@ -63,7 +77,7 @@ def check_points(name: str, points, *, allow_empty: bool = False) -> np.ndarray:
 
 def check_angles(name: str, angles, n: int) -> np.ndarray:
     """Convert to a finite ``(n,)`` float array of angles, radians."""
-    arr = np.asarray(angles, dtype=float)
+    arr = _floats(name, angles)
     if arr.shape != (n,):
         raise ValueError(f"{name} must have shape ({n},); got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
@@ -73,7 +87,7 @@ def check_angles(name: str, angles, n: int) -> np.ndarray:
 
 def check_fov(fov, n: int) -> np.ndarray:
     """Broadcast ``fov`` (scalar or ``(n,)``, radians) to ``(n,)`` within (0, 2*pi)."""
-    arr = np.asarray(fov, dtype=float)
+    arr = _floats("fov", fov)
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     if arr.shape != (n,):
@@ -87,7 +101,7 @@ def check_fov(fov, n: int) -> np.ndarray:
 
 def check_radii(name: str, radii, m: int) -> np.ndarray:
     """Broadcast ``radii`` (scalar or ``(m,)``, metres) to ``(m,)``, all > 0."""
-    arr = np.asarray(radii, dtype=float)
+    arr = _floats(name, radii)
     if arr.ndim == 0:
         arr = np.full(m, float(arr))
     if arr.shape != (m,):
@@ -100,7 +114,7 @@ def check_radii(name: str, radii, m: int) -> np.ndarray:
 def check_camera_radii(name: str, radii, n: int) -> np.ndarray:
     """Broadcast a camera's blind or sight radii ``radii`` (scalar or ``(n,)``, metres) to
     ``(n,)``, all >= 0 (``inf`` allowed)."""
-    arr = np.asarray(radii, dtype=float)
+    arr = _floats(name, radii)
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     if arr.shape != (n,):

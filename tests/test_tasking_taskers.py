@@ -421,6 +421,12 @@ def test_choose_errors(tasker, k, kwargs, match):
         (dict(fov=0.0), "fov must be in"),
         (dict(camera_yaw=YAW[:3]), r"camera_yaw must have shape \(6,\)"),
         (dict(radius=-0.1), "radius must be finite and > 0"),
+        # numpy's conversion errors named no parameter ("could not convert string to float: 'x'")
+        (dict(camera_xy="x"), "^camera_xy must be numbers"),
+        (dict(estimates=[[0.1, 0.2], [0.3]]), "^estimates must be numbers"),
+        (dict(camera_yaw=["a"] * 6), "^camera_yaw must be numbers"),
+        (dict(fov="wide"), "^fov must be numbers"),
+        (dict(radius="r"), "^radius must be numbers"),
     ],
 )
 def test_choose_input_errors(args, match):
