@@ -235,6 +235,10 @@ def wait_for_a_worker(client, scheduler: str) -> None:
         client.wait_for_workers(1)
 
 
+#: The protocols of a Dask scheduler that this process can reach over the network.
+NETWORK_SCHEMES = ("tcp", "tls", "ws", "wss")
+
+
 def check_scheduler(address: str, timeout: float) -> None:
     """A one-line ValueError unless a Dask scheduler at ``address`` answers "identity" within
     ``timeout`` seconds. ``Client`` alone waited forever on a port that accepts and never
@@ -244,6 +248,10 @@ def check_scheduler(address: str, timeout: float) -> None:
     from distributed.comm import connect
     from distributed.security import Security
 
+    scheme = address.split("://", 1)[0]
+    if scheme not in NETWORK_SCHEMES:           # inproc: this process alone; ucx: needs ucx-py
+        raise ValueError(f"scheduler: cannot use the address {address} (protocol {scheme!r}; expected "
+                         f"{', '.join(s + '://' for s in NETWORK_SCHEMES)})")
     security = Security().get_connection_args("client")     # as Client's: the Dask config's TLS settings
 
     async def identity():
@@ -278,7 +286,7 @@ def _port(address: str) -> int | None:
     from distributed.comm.addressing import parse_address, parse_host_port
 
     scheme, location = parse_address(address)
-    return parse_host_port(location)[1] if scheme in ("tcp", "tls", "ws", "wss") else None
+    return parse_host_port(location)[1] if scheme in NETWORK_SCHEMES else None
 
 
 def _why_unreachable(address: str, timeout: float = 1.0) -> str | None:
