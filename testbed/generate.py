@@ -433,8 +433,8 @@ def check_same_scene(out: Path, entry: dict, config: EpisodeConfig) -> None:
 
 def unlisted(out: Path, entries: dict[int, dict]) -> list[Path]:
     """The episode folders of ``out`` not in ``entries``, the temporary folders of unfinished
-    episodes and the temporary files of a manifest or run_info.json being rewritten when the
-    run was killed, sorted by name."""
+    episodes, and the temporary files of a manifest or run_info.json being rewritten or of a
+    check that ``out`` can be written (:data:`PROBE`) when the run was killed, sorted by name."""
     wanted = {episode_name(i) for i in entries}
     left = []
     for p in Path(out).iterdir():
@@ -452,7 +452,7 @@ def unlisted(out: Path, entries: dict[int, dict]) -> list[Path]:
 #: run_info.json: only these are removed as left behind (a file ``episode_best.yaml`` there,
 #: a user's, was deleted by ``--resume``).
 _RUN_FOLDER = re.compile(r"episode_\d{4,}|\.episode_\d{4,}\..+\.tmp")
-_RUN_FILE = re.compile(rf"\.({re.escape(MANIFEST)}|{re.escape(RUN_INFO)})\..+\.tmp")
+_RUN_FILE = re.compile(rf"\.({re.escape(MANIFEST)}|{re.escape(RUN_INFO)})\..+\.tmp|{re.escape(PROBE)}.+")
 
 
 def remove_unlisted(out: Path, entries: dict[int, dict] | None = None) -> None:

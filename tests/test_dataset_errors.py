@@ -313,13 +313,15 @@ def test_out_inside_an_episode_of_a_dataset_is_refused(tmp_path, capsys):
     assert not out.exists()
 
 
-def test_resume_removes_the_temporary_files_of_a_killed_manifest_rewrite(tmp_path):
+def test_resume_removes_the_temporary_files_of_a_killed_manifest_rewrite_or_probe(tmp_path):
     from testbed.generate import remove_unlisted, unlisted
 
     out = tmp_path / "ds"
     out.mkdir()
     (out / "manifest.json").write_text('{"episodes": []}')
-    strays = [out / ".manifest.json.k2x9.tmp", out / ".run_info.json.a1b2.tmp"]
+    # and the probes of a run killed while it checked that --out (or each worker) can write
+    strays = [out / ".camtask-probe.3f9a1c2b7d4e", out / ".camtask-probe.3f9a1c2b7d4e.a1b2c3",
+              out / ".camtask-probe.write-test.4242", out / ".manifest.json.k2x9.tmp", out / ".run_info.json.a1b2.tmp"]
     for p in strays:
         p.write_text("half")
     (out / "notes.manifest.json.tmp").write_text("not ours")
