@@ -199,7 +199,8 @@ def free_intervals(lo, hi, half_fov, min_gap: float = MIN_GAP):
 
 
 def wedge_radius(room: BaseGeometry, camera_xy: np.ndarray) -> float:
-    """Wedge length (metres): twice the diagonal of the box holding room and cameras."""
+    """Wedge length (metres): twice the diagonal of the box holding room and cameras, plus 1 m
+    (a room of one point still gets wedges of length)."""
     x0, y0, x1, y1 = room.bounds
     x0, y0 = min(x0, camera_xy[:, 0].min()), min(y0, camera_xy[:, 1].min())
     x1, y1 = max(x1, camera_xy[:, 0].max()), max(y1, camera_xy[:, 1].max())

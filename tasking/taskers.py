@@ -410,6 +410,8 @@ def choose_cameras(
     k = check_int("k", k, 1, n)
     m = check_int("m", m, 1, k)
     max_subsets = check_int("max_subsets", max_subsets, 1)
+    if uniform_sets is not None and not isinstance(uniform_sets, Mapping):   # `k in` a list: never, silently
+        raise ValueError(f"uniform_sets must be a mapping k -> k camera indices; got {type(uniform_sets).__name__}")
     estimates = check_points("estimates", estimates, allow_empty=True)
     check_radii("radius", radius, estimates.shape[0])
     if rng is not None and not isinstance(rng, np.random.Generator):

@@ -406,6 +406,8 @@ EST = np.array([[0.2, 0.0], [-0.3, 0.1]])
         ("optimal", 3, {"max_subsets": 2.5}, "max_subsets must be an integer; got 2.5"),
         ("optimal", 3, {"max_subsets": 0}, "max_subsets must be >= 1; got 0"),
         ("greedy", 3, {"max_subsets": None}, "max_subsets must be an integer; got None"),
+        # a list of sets was never looked up (`k in` the list), so the default spread was used
+        ("uniform", 2, {"uniform_sets": [(0, 3)]}, "uniform_sets must be a mapping k -> k camera indices; got list"),
     ],
 )
 def test_choose_errors(tasker, k, kwargs, match):
