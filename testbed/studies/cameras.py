@@ -216,8 +216,11 @@ def plot(result: dict, path: str) -> None:
         axes[2].loglog([n[k] for k in ok], [e[k] for k in ok], "o-", ms=3, color=color, label=f"{m}")
     axes[1].set(xlabel="number of cameras N", ylabel="residual / limit residual",
                 title="Fig. 6: residual scaled by the limit (objects >= 2)")
-    if axes[1].get_legend_handles_labels()[0]:    # no curve when every limit residual is 0
+    if axes[1].has_data():
         axes[1].legend(title="objects", fontsize=7, ncol=2)
+    else:                                       # no curve when every limit residual is 0 (one object)
+        axes[1].text(0.5, 0.5, "no object count\nwith a nonzero limit", ha="center", va="center",
+                     transform=axes[1].transAxes, color="grey")
     nn = np.array([min(r["cameras"] for r in recs if not r["limit"]),
                    max(r["cameras"] for r in recs if not r["limit"])], float)
     one = [r for r in recs if r["objects"] == objects[0] and not r["limit"]]
@@ -227,5 +230,22 @@ def plot(result: dict, path: str) -> None:
     axes[2].set(xlabel="number of cameras N", ylabel="residual - limit (object areas)",
                 title="excess over the limit")
     axes[2].legend(title="objects", fontsize=7, ncol=2)
+    # N is a count: plain numbers (log's own labels, 2x10^0, 3x10^0, 4x10^0, ran together)
+    for ax in (a for a in axes[1:] if a.has_data()):
+        ax.xaxis.set_major_locator(matplotlib.ticker.FixedLocator(count_ticks(nn[0], nn[1])))
+        ax.xaxis.set_major_formatter(matplotlib.ticker.StrMethodFormatter("{x:.0f}"))
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def count_ticks(lo: float, hi: float) -> list[float]:
+    """Ticks of a log axis of counts from ``lo`` to ``hi``: both ends, and between them 1, 2,
+    5, 10, 20, ... (1, 10, 100, ... over more than 300x) at least 1.5x from either end.
+
+    >>> count_ticks(2, 16), count_ticks(4, 256), count_ticks(2, 10000), count_ticks(8, 8)
+    ([2, 5, 10, 16], [4, 10, 20, 50, 100, 256], [2, 10, 100, 1000, 10000], [8])
+    """
+    steps = (1,) if hi / lo > 300 else (1, 2, 5)
+    between = [m * 10**e for e in range(int(np.log10(hi)) + 1) for m in steps if lo * 1.5 <= m * 10**e <= hi / 1.5]
+    return list(dict.fromkeys([lo, *between, hi]))

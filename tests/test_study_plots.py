@@ -1,0 +1,59 @@
+"""The --plot figures of `camtask study`: what is drawn and how it is labelled, read from the
+figure's artists (not its pixels)."""
+
+import re
+
+import pytest
+
+from testbed.studies import cameras
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """Figures a study's plot() would save, drawn (ticks and labels resolved), not written."""
+    figures = []
+
+    def keep(fig, path):
+        fig.canvas.draw()
+        figures.append(fig)
+
+    monkeypatch.setattr(cameras, "save_figure", keep)
+    yield figures
+    import matplotlib.pyplot as plt
+    plt.close("all")
+
+
+def cameras_result(objects=(1, 2, 3), ns=range(2, 17)):
+    """Records as `study cameras` makes them: residual ~ 2 / N^2 + limit, limit m^2 / 200."""
+    recs = []
+    for m in objects:
+        lim = (m - 1) ** 2 / 200
+        for n in ns:
+            res = 2 * m / n**2 + lim
+            recs.append({"objects": m, "cameras": n, "limit": False, "residual": res, "residual_sem": 0.01,
+                         "residual_raw": res, "scaled": res / lim if lim else None, "excess": res - lim, "trials": 5})
+        recs.append({"objects": m, "cameras": None, "limit": True, "method": "exact", "residual": lim,
+                     "residual_sem": 0.001, "residual_raw": lim, "scaled": 1.0 if lim else None, "excess": 0.0,
+                     "trials": 5})
+    return {"records": recs}
+
+
+def visible_tick_labels(axis):
+    """The texts of the labelled ticks (major and minor) inside the axis' view."""
+    lo, hi = sorted(axis.get_view_interval())
+    ticks = [*axis.get_major_ticks(), *axis.get_minor_ticks()]
+    return [t.label1.get_text() for t in ticks
+            if t.label1.get_visible() and t.label1.get_text() and lo <= t.get_loc() <= hi]
+
+
+@pytest.mark.parametrize("ns", [range(2, 17), [2, 4, 8, 9], range(4, 257, 4)])
+def test_camera_count_axes_are_labelled_with_plain_numbers(drawn, ns):
+    """N is a count on a log axis: figure 6 and the excess panel labelled it '2x10^0', '3x10^0',
+    '4x10^0', '6x10^0', '10^1' (the middle ones running into each other at the committed size)."""
+    cameras.plot(cameras_result(ns=ns), "unused.png")
+    fig, = drawn
+    for ax in fig.axes[1:]:
+        assert ax.get_xscale() == "log" and ax.get_xlabel() == "number of cameras N"
+        labels = visible_tick_labels(ax.xaxis)
+        assert len(labels) >= 2, labels
+        assert all(re.fullmatch(r"\d+", text) for text in labels), labels
