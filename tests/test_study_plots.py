@@ -57,3 +57,27 @@ def test_camera_count_axes_are_labelled_with_plain_numbers(drawn, ns):
         labels = visible_tick_labels(ax.xaxis)
         assert len(labels) >= 2, labels
         assert all(re.fullmatch(r"\d+", text) for text in labels), labels
+
+
+def integer_only(ax):
+    ticks = [t for t in ax.get_xticks() if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
+    labels = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
+    return ticks and all(t == int(t) for t in ticks) and labels and all(s.isdigit() for s in labels)
+
+
+def test_one_k_or_one_object_count_is_ticked_in_whole_numbers(drawn, monkeypatch):
+    """`--k 4` (static, lab), `--k 3` (moving) or `--objects 5` (cameras, figure 5) put a single
+    value on a count axis, ticked 3.80, 3.85, ... 4.20."""
+    from testbed.studies import core, moving, static
+
+    for module in (core, moving):
+        monkeypatch.setattr(module, "save_figure", lambda fig, path: (fig.canvas.draw(), drawn.append(fig)))
+    recs = [{"tasker": t, "k": 4, "residual": r, "residual_sem": 0.1, "trials": 3}
+            for t, r in (("uniform", 2.9), ("greedy", 1.9))]
+    static.plot({"records": recs}, "unused.png")
+    moving.plot({"records": [{**r, "update_every": 1, "steps": 3} for r in recs]}, "unused.png")
+    cameras.plot(cameras_result(objects=(5,)), "unused.png")
+    panels = [*drawn[0].axes, *drawn[1].axes, drawn[2].axes[0]]
+    assert [ax.get_xlabel() for ax in panels] == ["number of cameras tasked k"] * 3 + ["number of objects"]
+    for ax in panels:
+        assert integer_only(ax), (ax.get_title(), ax.get_xticks(), [t.get_text() for t in ax.get_xticklabels()])

@@ -202,7 +202,7 @@ def plot(result: dict, path: str) -> None:
     name = "exact limit" if lim[objects[0]]["cameras"] is None else f"{lim[objects[0]]['cameras']} cameras"
     ax.set(xlabel="number of objects", ylabel="residual / object area",
            title=f"Fig. 5: residual with 'infinite' cameras ({name})")
-    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))   # a count of objects
+    core.count_axis(ax.xaxis)                                                 # a count of objects
     ax.legend()
     cmap = plt.get_cmap("viridis")
     for i, m in enumerate(objects):

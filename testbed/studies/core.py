@@ -329,7 +329,15 @@ def plot_taskers(records: list[dict], path: str, title: str, ylabel: str, *, log
     if log:
         ax.set_yscale("log")
     ax.set(xlabel="number of cameras tasked k", ylabel=ylabel, title=title)
-    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))   # k is a count
+    count_axis(ax.xaxis)                                                      # k is a count
     ax.legend()
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def count_axis(axis) -> None:
+    """Tick a matplotlib axis of counts in whole numbers, also where one value is drawn
+    (MaxNLocator's integer=True alone then fell back to 3.80, 3.85, ... 4.20)."""
+    import matplotlib.ticker
+
+    axis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True, min_n_ticks=1))

@@ -164,7 +164,7 @@ def plot(result: dict, path: str) -> None:
                 xlabel="number of cameras tasked k")
     for ax in axes:
         ax.set_yscale("log")
-        ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))   # k is a count
+        core.count_axis(ax.xaxis)                                                  # k is a count
         if ax.has_data():
             ax.legend()
         else:                                   # fig. 10 needs incremental or uniform among --taskers
