@@ -107,6 +107,22 @@ class TopView:
             x += 13 + cv2.getTextSize(what, cv2.FONT_HERSHEY_SIMPLEX, 0.38, 1)[0][0] + 14
 
 
+def level_view(rgb: np.ndarray, rectifier, height: int) -> np.ndarray:
+    """A camera's frame (H, W, 3) as its level virtual camera sees it, (height, width, 3),
+    black where the raw image does not reach and below its ``rectifier.out_height`` rows:
+    column j is the vertical plane of column j of the camera's scanline. Raw columns are not
+    (pitch and lens bend them): in a lab camera a person at raw columns 560-599 (rows
+    200-479) has the run of columns 569-639.
+
+    rectifier : the camera's :class:`pipeline.rectify.Rectifier` (of one camera)
+    height : at least ``rectifier.out_height`` (cameras pitched otherwise have other heights)
+    """
+    out = np.zeros((height, rectifier.width, 3), np.uint8)
+    cv2.remap(rgb, rectifier.fixed_map[0], None, cv2.INTER_NEAREST, dst=out[:rectifier.out_height],
+              borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    return out
+
+
 def mosaic(rgb: np.ndarray, scanlines: np.ndarray, numbers, width: int, columns: int = 3) -> np.ndarray:
     """Tasked frames (k, H, W, 3) with their scanlines (k, W) drawn under them, tiled.
 

@@ -115,3 +115,43 @@ def test_a_cone_spans_its_columns_edges_as_the_hull_carves_it():
             a = b[j] + side * step
             u, v = view.px(xy[0] + 3.0 * np.array([np.cos(a), np.sin(a)]))
             assert tuple(img[v, u]) == BACKGROUND, (j, side)
+
+
+def test_video_tiles_show_the_columns_of_the_scanlines_under_them(monkeypatch):
+    """`run --video`: each tasked frame is drawn with its scanline under it. The raw frame was
+    drawn, whose columns pitch and lens bend: a person at raw columns 560-599 from row 200
+    down in lab camera 5's image had a true run of columns 569-639 under it."""
+    from types import SimpleNamespace
+
+    from pipeline import Pipeline
+    from scene import Scene, scene_path
+    from testbed import topview
+    from testbed.commands.run import _painter
+
+    text = scene_path("lab").read_text()             # camera 9 pitched less: a level view of another height
+    scene = Scene.from_text(text.replace("yaw_deg: -132.1, pitch_deg: 15.0}", "yaw_deg: -132.1, pitch_deg: 5.0}"))
+    numbers = (5, 9)
+    pipes = {n: Pipeline([scene.cameras[n - 1]]) for n in numbers}
+    heights = [p.rectifier.out_height for p in pipes.values()]
+    assert heights[0] != heights[1]
+    labels = np.zeros((len(numbers), 480, 640), np.int32)
+    labels[:, 120:, :100] = 1                                # people at both edges of the images
+    labels[:, 200:, 560:600] = 2
+    rgb = np.where(labels[..., None] > 0, 255, 0).astype(np.uint8).repeat(3, axis=3)
+    scans = np.stack([pipes[n].ground_truth(labels[i:i + 1])[1][0] for i, n in enumerate(numbers)])
+    result = FrameResult(0, numbers, scans, [], 0.0, 0.0, 0, (), (), np.zeros((0, 2)), np.zeros((0, 2)),
+                         np.zeros(0, int), np.zeros((0, 2)), rgb=rgb)
+    tiled = {}
+
+    def mosaic(frames, scanlines, tasked, width):
+        tiled.update(frames=frames, scanlines=scanlines)
+        return np.zeros((10, width, 3), np.uint8)
+
+    monkeypatch.setattr(topview, "mosaic", mosaic)
+    source = SimpleNamespace(pipes=pipes, bearings={n: p.bearings[0] for n, p in pipes.items()})
+    _painter(scene, source)(result)
+    assert np.array_equal(tiled["scanlines"], scans)
+    assert len(tiled["frames"]) == 2
+    for frame, scan in zip(tiled["frames"], scans):
+        assert np.array_equal(frame.any(axis=(0, 2)), scan)  # the people's columns are the runs' columns
+        assert frame.shape == (max(heights), scan.size, 3)   # one tile height for every frame of the video

@@ -177,13 +177,15 @@ def execute(scene, config, params, truth, sensor_rng, video=None):
 
 
 def _painter(scene, source):
-    from testbed.topview import TopView, mosaic
+    from testbed.topview import TopView, level_view, mosaic
 
     view = TopView(scene, width=720)
+    rows = max(p.rectifier.out_height for p in source.pipes.values())    # one size for every frame of the video
 
     def paint(result):
         top = view.draw(result, source.bearings)
-        tiles = mosaic(result.rgb, result.scanlines, result.tasked, width=720)
+        level = np.stack([level_view(rgb, source.pipes[n].rectifier, rows) for rgb, n in zip(result.rgb, result.tasked)])
+        tiles = mosaic(level, result.scanlines, result.tasked, width=720)   # column j over scanline column j
         return np.vstack([tiles, top])
     return paint
 
