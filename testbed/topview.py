@@ -85,12 +85,12 @@ class TopView:
             tail = self.tails.setdefault(int(i), [])
             tail.append(p)
             cv2.polylines(img, [self.px(np.array(tail[-40:]))], False, TRACK, 1, cv2.LINE_AA)
-            cv2.drawMarker(img, tuple(self.px(p)), TRACK, cv2.MARKER_CROSS, 10, 2)
+            _track_mark(img, tuple(self.px(p)))
             cv2.putText(img, str(int(i)), tuple(self.px(p) + 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, TRACK, 1)
         for n in range(1, len(xy) + 1):
             on = n in result.tasked
             q = tuple(self.px(xy[n - 1]))
-            cv2.circle(img, q, 6 if on else 4, CAMERA_ON if on else CAMERA_OFF, -1, cv2.LINE_AA)
+            _camera_mark(img, q, on)
             cv2.putText(img, str(n), (q[0] + 6, q[1] - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, WALL, 1)
         text = title or f"frame {result.index}  hull {result.hull_area:.2f} m2  residual {result.residual:.2f}"
         cv2.putText(img, text, (8, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, WALL, 1, cv2.LINE_AA)
@@ -98,13 +98,25 @@ class TopView:
         return img
 
     def _legend(self, img: np.ndarray) -> None:
-        """What the colours mean, along the bottom margin."""
+        """What the marks mean, each drawn as in the picture, along the bottom margin (as
+        squares of colour, tracks and tasked cameras were the same red square)."""
         y, x = self.height - 9, 8
-        for what, colour in (("person", TRUTH), ("track", TRACK), ("hull", HULL), ("occluded", CONE),
-                             ("tasked camera", CAMERA_ON)):
-            cv2.rectangle(img, (x, y - 7), (x + 9, y + 2), colour, -1)
-            cv2.putText(img, what, (x + 13, y + 2), cv2.FONT_HERSHEY_SIMPLEX, 0.38, WALL, 1, cv2.LINE_AA)
-            x += 13 + cv2.getTextSize(what, cv2.FONT_HERSHEY_SIMPLEX, 0.38, 1)[0][0] + 14
+        square = lambda colour: lambda im, c: cv2.rectangle(im, (c[0] - 5, c[1] - 5), (c[0] + 4, c[1] + 4), colour, -1)
+        for what, mark in (("person", lambda im, c: cv2.circle(im, c, 5, TRUTH, 2, cv2.LINE_AA)),
+                           ("track", _track_mark), ("hull", square(HULL)), ("occluded", square(CONE)),
+                           ("tasked camera", lambda im, c: _camera_mark(im, c, True)),
+                           ("other camera", lambda im, c: _camera_mark(im, c, False))):
+            mark(img, (x + 6, y - 3))
+            cv2.putText(img, what, (x + 16, y + 2), cv2.FONT_HERSHEY_SIMPLEX, 0.38, WALL, 1, cv2.LINE_AA)
+            x += 16 + cv2.getTextSize(what, cv2.FONT_HERSHEY_SIMPLEX, 0.38, 1)[0][0] + 14
+
+
+def _track_mark(img: np.ndarray, q) -> None:
+    cv2.drawMarker(img, q, TRACK, cv2.MARKER_CROSS, 10, 2)
+
+
+def _camera_mark(img: np.ndarray, q, tasked: bool) -> None:
+    cv2.circle(img, q, 6 if tasked else 4, CAMERA_ON if tasked else CAMERA_OFF, -1, cv2.LINE_AA)
 
 
 def level_view(rgb: np.ndarray, rectifier, height: int) -> np.ndarray:

@@ -155,3 +155,25 @@ def test_video_tiles_show_the_columns_of_the_scanlines_under_them(monkeypatch):
     for frame, scan in zip(tiled["frames"], scans):
         assert np.array_equal(frame.any(axis=(0, 2)), scan)  # the people's columns are the runs' columns
         assert frame.shape == (max(heights), scan.size, 3)   # one tile height for every frame of the video
+
+
+def test_no_two_legend_entries_look_alike():
+    """The legend showed tracks and tasked cameras as the same red square, and people (green
+    rings in the picture) as a filled square: each coloured entry is now drawn as its mark is."""
+    view = TopView(load_scene("lab"), width=720)
+    img = np.full((view.height, view.width, 3), BACKGROUND, np.uint8)
+    view._legend(img)
+    strip = img[view.height - view.margin:]
+    rgb = strip.astype(int)
+    coloured = rgb.max(axis=2) - rgb.min(axis=2) > 40          # the marks; the text is grey
+    cols = np.flatnonzero(coloured.any(axis=0))
+    glyphs = []
+    for g in np.split(cols, np.flatnonzero(np.diff(cols) > 1) + 1):
+        rows = np.flatnonzero(coloured[:, g].any(axis=1))
+        glyphs.append(strip[rows[0]:rows[-1] + 1, g[0]:g[-1] + 1])
+    assert len(glyphs) == 5                                     # person, track, hull, occluded, tasked camera
+    for i in range(len(glyphs)):
+        for j in range(i):
+            assert glyphs[i].shape != glyphs[j].shape or not np.array_equal(glyphs[i], glyphs[j]), (i, j)
+    person = glyphs[0]
+    assert np.array_equal(person[person.shape[0] // 2, person.shape[1] // 2], BACKGROUND)   # a ring
