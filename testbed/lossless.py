@@ -188,12 +188,12 @@ def read_video(path: str | os.PathLike, frames: int | None = None, name: str = "
             if n == 0 and not held:
                 raise ValueError(f"{name}: cannot read {str(path)!r}: {_message(log)} "
                                  "(not a video ffmpeg can open, or corrupt)")
-            raise ValueError(f"{name}: cannot read {str(path)!r} after {n} frames: {_message(log)} "
+            raise ValueError(f"{name}: cannot read {str(path)!r} after {n} frame{'' if n == 1 else 's'}: {_message(log)} "
                              "(truncated or corrupt)")
         if short:
             raise ValueError(f"{name}: {str(path)!r}: frame {n} ends early")
         if frames is not None and n != frames:
-            raise ValueError(f"{name}: {str(path)!r} holds {n} frames; expected {frames}")
+            raise ValueError(f"{name}: {str(path)!r} holds {n} frame{'' if n == 1 else 's'}; expected {frames}")
     finally:
         if proc.poll() is None:
             proc.kill()

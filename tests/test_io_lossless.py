@@ -54,6 +54,8 @@ def test_another_frame_count_is_refused_after_the_frames(tmp_path):
     with pytest.raises(ValueError, match=r"v.mkv' holds 2 frames; expected 3$"):
         got.extend(read_video(path, 3))
     assert len(got) == 2
+    with pytest.raises(ValueError, match=r"v1.mkv' holds 1 frame; expected 2$"):   # said "1 frames"
+        list(read_video(write(tmp_path / "v1.mkv", clip(1)), 2))
 
 
 def test_not_a_video_names_the_file_and_ffmpeg_s_reason(tmp_path):
