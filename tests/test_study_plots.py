@@ -81,3 +81,17 @@ def test_one_k_or_one_object_count_is_ticked_in_whole_numbers(drawn, monkeypatch
     assert [ax.get_xlabel() for ax in panels] == ["number of cameras tasked k"] * 3 + ["number of objects"]
     for ax in panels:
         assert integer_only(ax), (ax.get_title(), ax.get_xticks(), [t.get_text() for t in ax.get_xticklabels()])
+
+
+def test_tracking_title_counts_its_objects(monkeypatch, tmp_path):
+    """One walking object was titled "one of 1 objects"."""
+    from testbed.cli import main
+    from testbed.studies import tracking
+
+    titles = []
+    monkeypatch.setattr(tracking, "save_figure", lambda fig, path: titles.append(fig.get_suptitle()))
+    for n in (1, 3):
+        assert main(["study", "tracking", "--objects", str(n), "--trials", "1", "--steps", "6", "--workers", "0",
+                     "--pairs", "uniform:4", "--plot", str(tmp_path / "t.png")]) == 0
+    assert titles == ["Fig. 14: the object, true and estimated tracks",
+                      "Fig. 14: one of 3 objects, true and estimated tracks"]

@@ -183,7 +183,8 @@ def plot(result: dict, path: str) -> None:
         ax.set_aspect("equal")
         ax.set(xlim=(-1.05, 1.05), ylim=(-1.05, 1.05), xlabel="x (room radii)", ylabel="y (room radii)")
         ax.legend(loc="lower right", fontsize=7)
-    fig.suptitle(f"Fig. 14: one of {opts['objects']} objects, true and estimated tracks")
+    n = opts["objects"]
+    fig.suptitle(f"Fig. 14: {'the object' if n == 1 else f'one of {n} objects'}, true and estimated tracks")
     fig.tight_layout()
     save_figure(fig, path)
 
