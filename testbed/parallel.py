@@ -249,7 +249,7 @@ def check_scheduler(address: str, timeout: float) -> None:
     from distributed.security import Security
 
     scheme = address.split("://", 1)[0]
-    if scheme not in NETWORK_SCHEMES:           # inproc: this process alone; ucx: needs ucx-py
+    if scheme not in (*NETWORK_SCHEMES, "inproc"):      # inproc: a scheduler of this process (tests)
         raise ValueError(f"scheduler: cannot use the address {address} (protocol {scheme!r}; expected "
                          f"{', '.join(s + '://' for s in NETWORK_SCHEMES)})")
     security = Security().get_connection_args("client")     # as Client's: the Dask config's TLS settings
