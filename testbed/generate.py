@@ -516,7 +516,12 @@ def check_worker_versions(client) -> None:
                              f"({changes}); its episodes would not be the same bytes")
 
 
-def check_workers_share(client, out: Path, patience: float = 10.0) -> None:
+#: Seconds a file written here, or an episode folder that a worker has renamed into place,
+#: may take to show on the other machines (a network file system).
+SHARE_PATIENCE = 10.0
+
+
+def check_workers_share(client, out: Path, patience: float = SHARE_PATIENCE) -> None:
     """Refuse a cluster with a worker that does not see ``out`` at the same path, or cannot
     write there: it would write its episodes where this process never finds them, or fail
     each one it takes. A file with a random token is written into ``out`` and read back on
@@ -679,11 +684,14 @@ def _generate_on_dask(client, config: EpisodeConfig, out: Path, todo: Iterator[i
         threads = client.nthreads()
         for i in itertools.islice(todo, max(0, in_flight(client, threads) - len(pending))):
             pending[i], shown[i] = submit(i), 0
-        if pending and not threads and not alone:      # an existing cluster's workers all gone
+        # an existing cluster's workers all gone (a local cluster's nanny restarts its own: no word)
+        if pending and not threads and not alone and getattr(client, "cluster", None) is None:
             from tqdm import tqdm
 
+            n = len(pending)
             tqdm.write(f"warning: no Dask worker is left in the cluster at {client.scheduler.address}; "
-                       f"{len(pending)} episodes wait for one (Ctrl-C stops)", file=sys.stderr)   # over the bar
+                       f"{n} episode{'' if n == 1 else 's'} wait{'s' if n == 1 else ''} for one (Ctrl-C stops)",
+                       file=sys.stderr)                                         # over the bar
         alone = not threads
 
     def show(index: int, frames: int) -> None:
@@ -712,11 +720,6 @@ def _generate_on_dask(client, config: EpisodeConfig, out: Path, todo: Iterator[i
     finally:
         for f in pending.values():
             f.cancel()
-
-
-#: Seconds an episode folder that a worker has renamed into place may take to show here (a
-#: network file system), as for :func:`check_workers_share`.
-SHARE_PATIENCE = 10.0
 
 
 class NotShared(Exception):

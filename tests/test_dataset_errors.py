@@ -655,8 +655,8 @@ def test_a_cluster_that_loses_every_worker_says_so_once(tmp_path, monkeypatch, c
             super().__init__()
             self.workers = list(workers)        # True: the cluster has its workers at that look
 
-        def nthreads(self):
-            return super().nthreads() if self.workers.pop(0) else {}
+        def nthreads(self):                     # the last look holds from then on
+            return super().nthreads() if (self.workers.pop(0) if len(self.workers) > 1 else self.workers[0]) else {}
 
     config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
     out = tmp_path / "data"
@@ -668,6 +668,16 @@ def test_a_cluster_that_loses_every_worker_says_so_once(tmp_path, monkeypatch, c
     warning = "warning: no Dask worker is left in the cluster at tcp://10.0.0.5:8786; {} episodes wait for one " \
               "(Ctrl-C stops)"
     assert capsys.readouterr().err.splitlines() == [warning.format(4), warning.format(2)]   # once per time
+
+    class LocalClient(Client):                  # a local cluster's nanny restarts a dead worker in ~2 s
+        cluster = object()
+
+    out = tmp_path / "local"
+    gen.prepare_output(out, config, 10, False, False)
+    capsys.readouterr()
+    assert sorted(gen.generate(config, 10, out, {}, LocalClient([True, False, False, True, True, True]))) == list(
+        range(10))
+    assert capsys.readouterr().err == ""        # it said "no Dask worker is left" on every restart
 
 
 def test_an_episode_written_where_this_machine_does_not_see_it_is_not_listed(tmp_path, monkeypatch, capsys):
