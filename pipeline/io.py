@@ -181,6 +181,7 @@ class RenderDir:
             kind, first = "masks", self.root / "masks" / self.names[0]      # the frames' names are the masks'
             self.frame_names = tuple(sorted(p.name for p in first.glob("*.png")))
         self._decoders, self._next = None, 0    # the videos' readers, and the frame they yield next
+        self._last = None                       # (index, frames) last decoded: read again without decoding
         if not self.frame_names:
             raise ValueError(f"{name}: {first} has no frames")
         for cam in self.names[1:]:              # frame i is the same moment in every camera
@@ -226,34 +227,43 @@ class RenderDir:
 
         From videos, frames are decoded in order by one ffmpeg per camera, kept between calls
         (:func:`testbed.lossless.read_video`: a truncated or corrupt video, or one of another
-        number of frames than the masks, is a one-line ValueError naming it): reading them in
-        order costs one decoding; an earlier index than the last starts the videos again.
+        number of frames than the masks, is a one-line ValueError naming it, after which the
+        next call starts the videos again): reading them in order costs one decoding, the
+        last frame again none; an earlier index than the last starts the videos again.
         """
-        f = self.frame_names[index]
         if self.videos is None:
+            f = self.frame_names[index]
             return self._stack("frames", [self.root / "frames" / n / f for n in self.names], read_rgb)
-        index = self.frame_names.index(f)
+        index = range(len(self))[index]         # as a list indexes: negative from the end, IndexError past it
+        if self._last is not None and self._last[0] == index:
+            return self._last[1].copy()
         if self._decoders is None or index < self._next:
             from testbed.lossless import read_video
 
             self.close()
             self._decoders, self._next = [read_video(p, len(self)) for p in self.videos], 0
-        while True:
-            images = dict(zip(self.videos, [next(d) for d in self._decoders]))
-            self._next += 1
-            if self._next == len(self):         # read to their end: a longer video is not of these masks
-                for path, decoder in zip(self.videos, self._decoders):
-                    if next(decoder, None) is not None:
-                        raise ValueError(f"video: {str(path)!r} holds more than {len(self)} frames; "
-                                         f"expected {len(self)}, as masks/{path.stem} has")
-            if self._next > index:
-                return self._stack("frames", self.videos, images.__getitem__)
+        try:
+            while True:
+                images = dict(zip(self.videos, [next(d) for d in self._decoders]))
+                self._next += 1
+                if self._next == len(self):     # read to their end: a longer video is not of these masks
+                    for path, decoder in zip(self.videos, self._decoders):
+                        if next(decoder, None) is not None:
+                            raise ValueError(f"video: {str(path)!r} holds more than {len(self)} frames; "
+                                             f"expected {len(self)}, as masks/{path.stem} has")
+                if self._next > index:
+                    stack = self._stack("frames", self.videos, images.__getitem__)
+                    self._last = (index, stack)
+                    return stack.copy()
+        except BaseException:                   # the decoders stand at different frames now: start again
+            self.close()
+            raise
 
     def close(self) -> None:
         """Stop the ffmpeg processes decoding the videos (they also stop when this is collected)."""
         for decoder in self._decoders or ():
             decoder.close()
-        self._decoders = None
+        self._decoders, self._last = None, None
 
     def labels(self, index: int) -> np.ndarray:
         """(n_cams, H, W) int label images of frame ``index``."""

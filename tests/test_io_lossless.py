@@ -143,9 +143,45 @@ def test_a_render_directory_of_videos_reads_as_its_png_twin(tmp_path):
         write(video / "frames" / "cam02.mkv", [frames[f % 4, 1] for f in range(n)])
         with pytest.raises(ValueError, match=rf"^video: '.*video/frames/cam02.mkv' {problem}$"):
             [RenderDir(video).frames(i) for i in range(4)]
+    write(video / "frames" / "cam02.mkv", [frames[f, 1] for f in range(3)])
+    short = RenderDir(video)                    # cam02 has 3 frames: frame 3 cannot be read, each time
+    for _ in range(2):                          # the second time said StopIteration: the decoders were kept
+        with pytest.raises(ValueError, match=r"cam02.mkv' holds 3 frames; expected 4$"):
+            short.frames(3)
+    np.testing.assert_array_equal(short.frames(1), frames[1])
     (video / "frames" / "cam02.mkv").unlink()
     with pytest.raises(ValueError, match=r"^DIR: .* lacks 1 file of its first 1 frame: frames/cam02.mkv$"):
         RenderDir(video).check_complete(1)
+
+
+def test_a_video_frame_read_again_is_not_decoded_again(tmp_path, monkeypatch):
+    """Reading the frame just read started every camera's ffmpeg again from frame 0."""
+    import scene
+    from pipeline.io import RenderDir
+    from pipeline.synthetic import synthetic_sequence, write_render_dir
+    from testbed import lossless
+
+    cam = scene.Camera.from_pose(1, [1.5, 0.05, 2.2], np.radians(70), np.radians(15), 41, 30, np.radians(49),
+                                 [0, 0, 0, 0, 0])
+    bg, frames, labels = synthetic_sequence([cam], 3, np.random.default_rng(5))
+    write_render_dir(tmp_path, [cam], bg, frames, labels)
+    import shutil
+
+    shutil.rmtree(tmp_path / "frames" / cam.name)
+    write(tmp_path / "frames" / f"{cam.name}.mkv", list(frames[:, 0]))
+    opened = []
+    real = lossless.read_video
+    monkeypatch.setattr(lossless, "read_video", lambda *a, **k: opened.append(a[0]) or real(*a, **k))
+    r = RenderDir(tmp_path)
+    got = [r.frames(i) for i in (0, 1, 1, 2, 2, -1)]
+    for g, i in zip(got, (0, 1, 1, 2, 2, 2)):
+        np.testing.assert_array_equal(g, frames[i])
+    got[1][:] = 0                               # the caller's copy: the next read is the frame's own
+    np.testing.assert_array_equal(r.frames(2), frames[2])
+    assert len(opened) == 1
+    r.frames(0)                                 # an earlier frame: decoded from the start
+    assert len(opened) == 2
+    r.close()
 
 
 @pytest.mark.parametrize(("script", "status"), [("exit 1", "failed with exit status 1"),

@@ -89,6 +89,7 @@ def _run_render(args, params) -> int:
     with tqdm(total=n, desc="scanlines", unit="frame", file=sys.stderr, disable=args.json) as bar:
         result = run_sequence(pipe, (render.frames(i) for i in range(n)),
                               (render.labels(i) for i in range(n)), progress=lambda: bar.update())
+    render.close()                                  # a video episode's decoders, when --frames stopped early
     radii = {}
     if size is not None:                            # where the cameras can see people at all
         height, width = size

@@ -80,6 +80,7 @@ def run(args) -> int:
             frames[i] = f
             gt.append(pipe.ground_truth(render.labels(i))[1])
             bar.update()
+    render.close()                          # a video episode's decoders (~60 MB each) idle through the trials
     gt = np.stack(gt)
     if not gt.any():
         print(f"warning: nobody is in view in the {n} frame{'s' * (n != 1)} tuned on (no column of a true scanline "
@@ -149,7 +150,9 @@ def history_figure(f1):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
+    from matplotlib.ticker import FuncFormatter, NullFormatter
+
+    from testbed.output import count_axis
 
     f1 = np.asarray(f1, float)
     low, high = PLOT_RANGE
@@ -171,8 +174,7 @@ def history_figure(f1):
     lo, hi = (np.log(x / (1 - x)) for x in (shown.min(), shown.max()))
     pad = max(0.05 * (hi - lo), 0.2)
     ax.set_ylim(*(1 / (1 + np.exp(-y)) for y in (lo - pad, hi + pad)))
-    # integer ticks even where only one fits (one trial): else it fell back to 0.945, 0.96, ...
-    ax.xaxis.set_major_locator(MaxNLocator(integer=True, min_n_ticks=1))
+    count_axis(ax.xaxis)                    # trials: one trial's axis had fallen back to 0.945, 0.96, ...
     ax.yaxis.set_major_formatter(FuncFormatter(_decimal))
     shown_major = [y for y in ax.get_yticks() if ax.get_ylim()[0] <= y <= ax.get_ylim()[1]]
     # fewer than two labelled lines within one decade of errors: label the ones between too
