@@ -152,6 +152,15 @@ def check_outside_episodes(option: str, out: str | os.PathLike) -> None:
                          "manifest.json checksums its files; choose a folder outside that dataset")
 
 
+def count_axis(axis) -> None:
+    """Tick a matplotlib axis of counts (cameras, objects, trials) in whole numbers, also
+    where one value is drawn (MaxNLocator's integer=True alone then fell back to 3.80,
+    3.85, ... 4.20)."""
+    import matplotlib.ticker
+
+    axis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True, min_n_ticks=1))
+
+
 def save_figure(fig, path: str | os.PathLike, dpi: float = 80) -> None:
     """Draw matplotlib figure ``fig`` as a PNG to ``path`` (its folder made when missing),
     atomically, and close the figure."""

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from scene.checks import used_or_refused
-from testbed.output import save_figure
+from testbed.output import count_axis, save_figure
 from testbed.parallel import chunk
 
 from . import core
@@ -202,7 +202,7 @@ def plot(result: dict, path: str) -> None:
     name = "exact limit" if lim[objects[0]]["cameras"] is None else f"{lim[objects[0]]['cameras']} cameras"
     ax.set(xlabel="number of objects", ylabel="residual / object area",
            title=f"Fig. 5: residual with 'infinite' cameras ({name})")
-    core.count_axis(ax.xaxis)                                                 # a count of objects
+    count_axis(ax.xaxis)                                                 # a count of objects
     ax.legend()
     cmap = plt.get_cmap("viridis")
     for i, m in enumerate(objects):

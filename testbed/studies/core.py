@@ -21,7 +21,7 @@ from shapely.geometry import Polygon
 from scene.checks import used_or_refused
 from scene.motion import circle_polygon
 from tasking import TASKERS, choose_cameras, polygon_centres, prune_small, visual_hull_of_discs
-from testbed.output import save_figure
+from testbed.output import count_axis, save_figure
 
 #: Where the taskers come from (recorded in every study's metadata).
 TASKING_BACKEND = "tasking"
@@ -333,11 +333,3 @@ def plot_taskers(records: list[dict], path: str, title: str, ylabel: str, *, log
     ax.legend()
     fig.tight_layout()
     save_figure(fig, path)
-
-
-def count_axis(axis) -> None:
-    """Tick a matplotlib axis of counts in whole numbers, also where one value is drawn
-    (MaxNLocator's integer=True alone then fell back to 3.80, 3.85, ... 4.20)."""
-    import matplotlib.ticker
-
-    axis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True, min_n_ticks=1))

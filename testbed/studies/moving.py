@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from scene.checks import used_or_refused
-from testbed.output import save_figure
+from testbed.output import count_axis, save_figure
 from testbed.parallel import chunk
 
 from . import core
@@ -164,7 +164,7 @@ def plot(result: dict, path: str) -> None:
                 xlabel="number of cameras tasked k")
     for ax in axes:
         ax.set_yscale("log")
-        core.count_axis(ax.xaxis)                                                  # k is a count
+        count_axis(ax.xaxis)                                                  # k is a count
         if ax.has_data():
             ax.legend()
         else:                                   # fig. 10 needs incremental or uniform among --taskers
