@@ -252,6 +252,12 @@ def check_scheduler(address: str, timeout: float) -> None:
     if scheme not in (*NETWORK_SCHEMES, "inproc"):      # inproc: a scheduler of this process (tests)
         raise ValueError(f"scheduler: cannot use the address {address} (protocol {scheme!r}; expected "
                          f"{', '.join(s + '://' for s in NETWORK_SCHEMES)})")
+    try:
+        port = _port(address)
+    except ValueError as exc:                   # no port, or not a number: Dask's own words
+        raise ValueError(f"scheduler: cannot use the address {address} ({exc})") from None
+    if port is not None and not 0 < port < 65536:   # Dask's resolver takes it modulo 65536: another port
+        raise ValueError(f"scheduler: cannot use the address {address} (port {port} is not in 1..65535)")
     security = Security().get_connection_args("client")     # as Client's: the Dask config's TLS settings
 
     async def identity():
@@ -270,8 +276,6 @@ def check_scheduler(address: str, timeout: float) -> None:
     except _BadAddress as exc:
         raise ValueError(f"scheduler: cannot use the address {address} ({exc})") from None
     except (TimeoutError, OSError):
-        if (port := _port(address)) is not None and not 0 < port < 65536:   # the resolver takes it modulo 65536
-            raise ValueError(f"scheduler: cannot use the address {address} (port {port} is not in 1..65535)") from None
         why = _why_unreachable(address)
         why = f"{why}; tried for {timeout:g} s" if why else f"no answer within {timeout:g} s"
         raise ValueError(f"scheduler: cannot reach a Dask scheduler at {address} ({why})") from None
