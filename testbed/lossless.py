@@ -148,8 +148,8 @@ def read_video(path: str | os.PathLike, frames: int | None = None, name: str = "
     read it (that cost as much as decoding a few frames).
     """
     path = check_input_file(name, path)
-    log = tempfile.TemporaryFile()  # noqa: SIM115 (closed in finally)
     exe = ffmpeg_exe()
+    log = tempfile.TemporaryFile()  # noqa: SIM115 (closed in finally)
     proc = subprocess.Popen([exe, "-v", "error", "-nostdin", "-i", str(path), "-map", "0:v:0",
                              "-f", "image2pipe", "-c:v", "ppm", "-pix_fmt", "rgb24", "-"],
                             stdout=subprocess.PIPE, stderr=log, start_new_session=True)

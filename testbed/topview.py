@@ -57,9 +57,10 @@ class TopView:
         # Each tasked camera's occluded cones, shaded so that overlaps darken: the hull
         # is where every tasked camera's cones (or its blind side) meet.
         shade = np.zeros((self.height, self.width), np.float32)
+        # each tasked camera's column edges; a field of view may cross +-pi (lab cameras 6, 7)
+        edges_of = {n: column_edges(np.unwrap(bearings[n])[None])[0] for n in result.tasked}
         for n, scan in zip(result.tasked, result.scanlines):
-            c = xy[n - 1]
-            edges = column_edges(np.unwrap(bearings[n])[None])[0]  # a field of view may cross +-pi (lab 6, 7)
+            c, edges = xy[n - 1], edges_of[n]
             mask = np.zeros((self.height, self.width), np.uint8)
             for lo, hi in _runs(scan):          # from the run's outer column edges, as the hull carves
                 fan = np.linspace(edges[lo], edges[hi], 8)
@@ -69,7 +70,7 @@ class TopView:
         alpha = (0.5 * shade / max(len(result.tasked), 1) * self.inside)[..., None]
         img = (img * (1 - alpha) + np.array(CONE, np.float32) * alpha).astype(np.uint8)
         for n in result.tasked:                          # field-of-view edges
-            c, edges = xy[n - 1], column_edges(np.unwrap(bearings[n])[None])[0]
+            c, edges = xy[n - 1], edges_of[n]
             for a in (edges[0], edges[-1]):
                 cv2.line(img, tuple(self.px(c)), tuple(self.px(c + reach * np.array([np.cos(a), np.sin(a)]))),
                          CAMERA_OFF, 1, cv2.LINE_AA)
