@@ -516,6 +516,26 @@ def check_worker_versions(client) -> None:
                              f"({changes}); its episodes would not be the same bytes")
 
 
+def check_workers_ffmpeg(client) -> None:
+    """Refuse (one line naming the first such worker) a cluster with a worker that has no
+    ffmpeg to write ``--format video``'s videos: this machine's is checked before any work,
+    a worker's own was found only at its first episode, failing the run there."""
+    for worker, problem in sorted(client.run(_ffmpeg_problem).items()):
+        if problem is not None:
+            raise ValueError(f"--scheduler: worker {worker} cannot write --format video ({problem})")
+
+
+def _ffmpeg_problem() -> str | None:
+    """Why the worker that runs this has no ffmpeg (:func:`testbed.lossless.ffmpeg_exe`), or None."""
+    from testbed.lossless import ffmpeg_exe
+
+    try:
+        ffmpeg_exe()
+    except OSError as exc:
+        return str(exc)
+    return None
+
+
 #: Seconds a file written here, or an episode folder that a worker has renamed into place,
 #: may take to show on the other machines (a network file system).
 SHARE_PATIENCE = 10.0

@@ -303,6 +303,26 @@ def test_workers_that_cannot_write_the_output_folder_are_refused(tmp_path, monke
     assert list(tmp_path.iterdir()) == []           # no probe left
 
 
+def test_workers_without_ffmpeg_are_refused_for_video(tmp_path, monkeypatch):
+    """--format video checked this machine's ffmpeg before any work, not a --scheduler
+    worker's: a worker without one failed the run at its first episode."""
+    from testbed.generate import check_workers_ffmpeg
+
+    class Cluster:                                  # client.run(f): f's result on every worker
+        def run(self, fn):
+            first = fn()
+            with monkeypatch.context() as m:        # the second worker's IMAGEIO_FFMPEG_EXE names nothing
+                m.setenv("IMAGEIO_FFMPEG_EXE", str(tmp_path / "no-ffmpeg"))
+                second = fn()
+            return {"tcp://10.0.0.0:1": first, "tcp://10.0.0.1:1": second}
+
+    with pytest.raises(ValueError) as err:
+        check_workers_ffmpeg(Cluster())
+    assert str(err.value) == (f"--scheduler: worker tcp://10.0.0.1:1 cannot write --format video (ffmpeg: "
+                              f"'{tmp_path / 'no-ffmpeg'}' (IMAGEIO_FFMPEG_EXE) is not an executable file; install "
+                              "imageio-ffmpeg's binaries or point IMAGEIO_FFMPEG_EXE at an ffmpeg)")
+
+
 def test_out_inside_an_episode_of_a_dataset_is_refused(tmp_path, capsys):
     dataset = tmp_path / "ds"
     (dataset / "episode_0002").mkdir(parents=True)

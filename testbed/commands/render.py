@@ -213,6 +213,7 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
     from testbed.generate import (
         MANIFEST,
         check_worker_versions,
+        check_workers_ffmpeg,
         check_workers_share,
         generate,
         read_manifest,
@@ -233,6 +234,8 @@ def _run(args: argparse.Namespace, config, scene, out: Path, workers: int | None
                 wait_for_a_worker(client, args.scheduler)           # checked below, then rendered
                 check_worker_versions(client)
                 check_workers_share(client, out)
+                if config.fmt == "video":
+                    check_workers_ffmpeg(client)
             if args.scheduler is not None or args.overwrite:
                 keep = _prepare(args, config, out)
             todo = args.episodes - len(keep)
