@@ -1,11 +1,12 @@
 """The top view draws each tasked camera's occluded cone where its scanline says."""
 
+import cv2
 import numpy as np
 import pytest
 
 from scene import load_scene
 from testbed.loop import FrameResult
-from testbed.topview import BACKGROUND, TopView
+from testbed.topview import BACKGROUND, CAMERA_OFF, TopView
 
 
 def _frame(camera: int, scan: np.ndarray) -> FrameResult:
@@ -177,3 +178,7 @@ def test_no_two_legend_entries_look_alike():
             assert glyphs[i].shape != glyphs[j].shape or not np.array_equal(glyphs[i], glyphs[j]), (i, j)
     person = glyphs[0]
     assert np.array_equal(person[person.shape[0] // 2, person.shape[1] // 2], BACKGROUND)   # a ring
+    # and the other cameras' grey dot, after them: solid 3 x 3 (text's edges only touch its grey)
+    solid = cv2.erode((strip == CAMERA_OFF).all(axis=2).astype(np.uint8), np.ones((3, 3), np.uint8))
+    grey = np.flatnonzero(solid.any(axis=0))
+    assert grey.size and grey.min() > cols.max()
