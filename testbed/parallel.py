@@ -253,7 +253,7 @@ def check_scheduler(address: str, timeout: float) -> None:
         raise ValueError(f"scheduler: cannot use the address {address} (protocol {scheme!r}; expected "
                          f"{', '.join(s + '://' for s in NETWORK_SCHEMES)})")
     try:
-        port = _port(address)
+        port = (_host_port(address) or (None, None))[1]
     except ValueError as exc:                   # no port, or not a number: Dask's own words
         raise ValueError(f"scheduler: cannot use the address {address} ({exc})") from None
     if port is not None and not 0 < port < 65536:   # Dask's resolver takes it modulo 65536: another port
@@ -285,12 +285,13 @@ def check_scheduler(address: str, timeout: float) -> None:
         raise ValueError(f"scheduler: {address} is not a Dask scheduler (it answered {str(reply)[:60]!r})")
 
 
-def _port(address: str) -> int | None:
-    """The port of a TCP-based Dask ``address`` (tcp, tls, ws, wss), else None."""
+def _host_port(address: str) -> tuple[str, int] | None:
+    """(host, port) of a TCP-based Dask ``address`` (tcp, tls, ws, wss), else None; a
+    ValueError in Dask's words when the port is missing or not a number."""
     from distributed.comm.addressing import parse_address, parse_host_port
 
     scheme, location = parse_address(address)
-    return parse_host_port(location)[1] if scheme in NETWORK_SCHEMES else None
+    return parse_host_port(location) if scheme in NETWORK_SCHEMES else None
 
 
 def _why_unreachable(address: str, timeout: float = 1.0) -> str | None:
@@ -300,13 +301,10 @@ def _why_unreachable(address: str, timeout: float = 1.0) -> str | None:
     short and the reason lost: a typo in a host name read as a firewall dropping packets."""
     import socket
 
-    from distributed.comm.addressing import parse_address, parse_host_port
-
-    if _port(address) is None:
+    if (where := _host_port(address)) is None:
         return None
-    host, port = parse_host_port(parse_address(address)[1])
     try:
-        with socket.create_connection((host, port), timeout=timeout):
+        with socket.create_connection(where, timeout=timeout):
             return None
     except OSError as exc:
         return exc.strerror                 # None for a time-out
