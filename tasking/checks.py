@@ -44,10 +44,17 @@ def _floats(name: str, value) -> np.ndarray:
     Traceback (most recent call last):
         ...
     ValueError: fov must be numbers (an array of floats); got str
+    >>> _floats("centers", [[0, 0], [1]])
+    Traceback (most recent call last):
+        ...
+    ValueError: centers must be an array of floats, its rows of one length; got rows of different lengths
     """
     try:
         return np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError) as e:
+        if "inhomogeneous" in str(e):
+            raise ValueError(f"{name} must be an array of floats, its rows of one length; got rows of different "
+                             "lengths") from None
         raise ValueError(f"{name} must be numbers (an array of floats); got {type(value).__name__}") from None
 
 

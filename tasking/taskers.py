@@ -467,13 +467,23 @@ class IncrementalTasker:
         self.m = check_int("m", m, 1, self.k)
         self.update_every = check_int("update_every", update_every, 1)
         self.current: np.ndarray | None = None
+        self.n_cameras: int | None = None   # the network of the tasked set
 
     def step(self, frame_index: int, camera_xy, camera_yaw, fov, estimates, radius, room):
-        """Cameras to task for this frame: (k,) int, sorted 0-based indices."""
+        """Cameras to task for this frame: (k,) int, sorted 0-based indices.
+
+        Every step must pass the same network (``camera_xy`` of the same length): the
+        tasked set is indices into it.
+        """
         frame_index = check_int("frame_index", frame_index, 0)
+        n = len(check_points("camera_xy", camera_xy))
+        if self.n_cameras is not None and n != self.n_cameras:
+            raise ValueError(f"camera_xy has {n} cameras, but this IncrementalTasker tasks {self.k} of "
+                             f"{self.n_cameras} (its earlier steps); make a new IncrementalTasker for another network")
         if self.current is None or frame_index % self.update_every == 0:
             self.current = choose_cameras(
                 "incremental", self.k, camera_xy, camera_yaw, fov, estimates, radius, room,
                 current=self.current, m=self.m,
             )
+            self.n_cameras = n
         return self.current.copy()

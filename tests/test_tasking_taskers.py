@@ -425,7 +425,7 @@ def test_choose_errors(tasker, k, kwargs, match):
         (dict(radius=-0.1), "radius must be finite and > 0"),
         # numpy's conversion errors named no parameter ("could not convert string to float: 'x'")
         (dict(camera_xy="x"), "^camera_xy must be numbers"),
-        (dict(estimates=[[0.1, 0.2], [0.3]]), "^estimates must be numbers"),
+        (dict(estimates=[[0.1, 0.2], [0.3]]), "^estimates must be an array of floats, its rows of one length"),
         (dict(camera_yaw=["a"] * 6), "^camera_yaw must be numbers"),
         (dict(fov="wide"), "^fov must be numbers"),
         (dict(radius="r"), "^radius must be numbers"),
@@ -453,6 +453,18 @@ def test_incremental_tasker_errors():
         IncrementalTasker(3, 1, 0)
     with pytest.raises(ValueError, match="m must be >= 1 and <= 3"):
         IncrementalTasker(3, 4)
+
+
+def test_incremental_tasker_refuses_another_network():
+    """Its tasked set indexes the network of its earlier steps: a step with fewer cameras
+    named `current` (an argument the caller never passed), and on a frame between updates
+    returned indices of the old network without a word."""
+    xy, yaw, c = drop(9, n=12, m=4)
+    for frame in (1, 3):                    # between updates, and an update frame
+        tasker = IncrementalTasker(k=4, m=1, update_every=3)
+        tasker.step(0, xy, yaw, np.pi, c, R, ROOM)
+        with pytest.raises(ValueError, match="camera_xy has 8 cameras, but this IncrementalTasker tasks 4 of 12"):
+            tasker.step(frame, xy[:8], yaw[:8], np.pi, c, R, ROOM)
 
 
 # --- fast removal vs reference -----------------------------------------------------------
