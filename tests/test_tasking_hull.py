@@ -381,3 +381,42 @@ def test_hull_overlays_hold_for_coordinates_large_against_the_room(offset, xy, y
     assert Point(2.0, 1.5).buffer(0.3 * (1 - 1e-9), quad_segs=32).difference(hull).area < 1e-9
     if any(offset):
         assert sym_diff_area(hull, visual_hull_of_discs(xy, yaw, fov, centre, 0.3, room)) < 1e-6
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_an_empty_scanline_proves_empty_its_field_of_view_and_nothing_beside_it(reverse):
+    """A camera in the middle of the room: what lies outside its field of view (the span of
+    its column edges) stays in the hull. Cameras on the wall with 180 degrees cannot show
+    this: the room behind them is outside it anyway."""
+    bearings = np.array([[-1.5, -0.5, 0.5, 1.5]]) * np.pi / 8     # column edges -pi/4 .. pi/4
+    if reverse:
+        bearings = bearings[:, ::-1]
+    hull = visual_hull_of_scanlines([[0.0, 0.0]], bearings, np.zeros((1, 4), bool), SQUARE)
+    seen = Polygon([(0, 0), (1, -1), (1, 1)])
+    assert sym_diff_area(hull, SQUARE.difference(seen)) < 1e-12
+
+
+@pytest.mark.parametrize("bad, match", [
+    ([0.0, 0.1, 0.1, 0.2], r"strictly monotone along each row \(row 1\)"),    # a repeated bearing
+    ([0.3, 0.2, 0.2, 0.1], r"strictly monotone along each row \(row 1\)"),
+    ([0.0, 0.2, 0.1, 0.3], r"strictly monotone along each row \(row 1\)"),
+    ([0.0, 2.0, 4.0, 6.0], r"span less than 2\*pi"),
+])
+def test_scanline_errors_of_a_camera_beside_a_good_one(bad, match):
+    """Every camera's row is checked, not only as a whole: camera 0 is fine, camera 1 not."""
+    bearings = np.array([[0.0, 0.1, 0.2, 0.3], bad])
+    with pytest.raises(ValueError, match=match):
+        visual_hull_of_scanlines([[-1, 0], [1, 0]], bearings, np.zeros((2, 4), bool), SQUARE)
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_occupied_columns_at_both_edges_of_the_image_stay_occluded(reverse):
+    """The outer columns' edges extrapolate the first and last column steps: a camera on the
+    left wall with its first and last of 4 columns occupied frees only [-pi/4, pi/4]."""
+    bearings = np.array([[-1.5, -0.5, 0.5, 1.5]]) * np.pi / 4
+    occ = np.array([[True, False, False, True]])
+    if reverse:
+        bearings, occ = bearings[:, ::-1], occ[:, ::-1]
+    hull = visual_hull_of_scanlines([[-1.0, 0.0]], bearings, occ, SQUARE)
+    corners = Polygon([(-1, 0), (-1, 1), (0, 1)]).union(Polygon([(-1, 0), (-1, -1), (0, -1)]))
+    assert sym_diff_area(hull, corners) < 1e-12
