@@ -420,3 +420,21 @@ def test_occupied_columns_at_both_edges_of_the_image_stay_occluded(reverse):
     hull = visual_hull_of_scanlines([[-1.0, 0.0]], bearings, occ, SQUARE)
     corners = Polygon([(-1, 0), (-1, 1), (0, 1)]).union(Polygon([(-1, 0), (-1, -1), (0, -1)]))
     assert sym_diff_area(hull, corners) < 1e-12
+
+
+def test_drop_slivers_drops_only_the_slivers_of_a_many_part_hull():
+    """Docs: parts of area <= SLIVER * room.area are dropped; the other parts all stay,
+    whatever their number, and the threshold grows with the room (100 x 100 m here)."""
+    from tasking.hull import SLIVER, drop_slivers
+
+    room = box(0, 0, 100, 100)
+    a, b = box(1, 1, 2, 2), box(5, 5, 6, 7)
+    sliver = box(50, 50, 50 + 1e-5, 50 + 1e-5)      # 1e-10 m^2 < SLIVER * room.area
+    bigger = box(60, 60, 60 + 1e-3, 60 + 1e-3)      # 1e-6 m^2 > SLIVER * room.area
+    assert sliver.area < SLIVER * room.area < bigger.area
+    stray = [LineString([(0, 0), (3, 3)]), Point(9, 9)]
+    for parts, want in [([a, sliver, b, *stray], [a, b]), ([sliver, a, bigger, b], [a, bigger, b]),
+                        ([a, sliver], [a]), ([sliver, *stray], [])]:
+        got = drop_slivers(GeometryCollection(parts), room)
+        assert shapely.get_num_geometries(got) == len(want)
+        assert sym_diff_area(got, shapely.union_all(want)) == 0.0
