@@ -438,3 +438,32 @@ def test_drop_slivers_drops_only_the_slivers_of_a_many_part_hull():
         got = drop_slivers(GeometryCollection(parts), room)
         assert shapely.get_num_geometries(got) == len(want)
         assert sym_diff_area(got, shapely.union_all(want)) == 0.0
+
+
+@pytest.mark.parametrize("scale", [0.05, 0.2, 30.0])
+def test_the_hull_scales_with_the_scene(scale):
+    """Metres are not special: the paper's scene shrunk to a 5 cm room (or grown to 30 m)
+    has the paper-scale hull shrunk (grown) with it; the wedges reach across any room."""
+    from shapely import affinity
+
+    xy, yaw = ring_cameras(8)
+    centres = np.array([[0.3, 0.2], [-0.4, -0.1], [0.1, -0.5]])
+    hull = visual_hull_of_discs(xy, yaw, np.pi, centres, R, circle_room())
+    small = visual_hull_of_discs(scale * xy, yaw, np.pi, scale * centres, scale * R,
+                                 affinity.scale(circle_room(), scale, scale, origin=(0, 0)))
+    expected = affinity.scale(hull, scale, scale, origin=(0, 0))
+    assert sym_diff_area(small, expected) < 1e-12 * scale**2
+
+
+@pytest.mark.parametrize("where", [(1000.0, 1.5), (2.0, -700.0), (-300.0, 400.0)])
+def test_a_camera_far_outside_the_room_proves_all_of_it_empty(where):
+    """Wedges reach the room from wherever the camera is: a camera hundreds of metres
+    away whose narrow field of view holds the whole 4 x 3 m room, and no object, leaves
+    no hull; beside a camera on the wall, too."""
+    room = box(0, 0, 4, 3)
+    xy = np.array([where])
+    yaw = np.arctan2(1.5 - xy[:, 1], 2.0 - xy[:, 0])
+    hull = visual_hull_of_discs(xy, yaw, 0.05, np.empty((0, 2)), R, room)
+    assert hull.area < 1e-9
+    both = visual_hull_of_discs([[0.0, 1.5], where], [0.0, yaw[0]], [0.05, 0.05], np.empty((0, 2)), R, room)
+    assert both.area < 1e-9
