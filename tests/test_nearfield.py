@@ -276,3 +276,43 @@ def test_hulls_keep_people_too_thin_for_far_cameras_to_see(lab):
     assert max(lost[2 * thin.people.radius]) < 0.04
     near, far = pipe.sight_range(thin.people.height, object_width=0.06)
     assert np.allclose(far, far[0]) and 4.0 < far[0] < 5.0
+
+
+def farthest(geom, centre) -> float:
+    """Largest distance (metres) from ``centre`` to a vertex of ``geom``: a polygon lies in a
+    disc about ``centre`` if and only if its vertices do (the disc is convex)."""
+    return float(np.max(np.hypot(*(shapely.get_coordinates(geom) - centre).T), initial=0.0))
+
+
+def test_near_and_far_hold_per_camera_beside_cameras_without_them():
+    """A camera with no blind radius (near 0) or no sight limit (far inf) beside others does
+    not lift theirs: the others' wedges still avoid their blind discs and end at their far."""
+    xy, bearings, scans, room = random_rig({"seed": 5, "n": 4, "near": 0.0, "fov": 1.5})
+    near, far = np.array([0.0, 0.7, 0.0, 0.7]), np.array([np.inf, np.inf, 2.0, 2.0])
+    plain = free_wedges_from_scanlines(xy, bearings, scans, room)
+    cut = free_wedges_from_scanlines(xy, bearings, scans, room, near, far)
+    assert cut[0].symmetric_difference(plain[0]).area < 1e-12
+    for c in (1, 3):
+        assert not cut[c].is_empty
+        assert cut[c].intersection(Point(xy[c]).buffer(near[c], quad_segs=64)).area < 1e-12
+    for c in (2, 3):
+        assert not cut[c].is_empty
+        assert farthest(cut[c], xy[c]) <= far[c] * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("far", [0.3, 0.8, 2.0])
+def test_a_sight_radius_alone_frees_the_field_of_view_up_to_it(far):
+    """far without near: an empty scanline proves empty the sector of radius far (its
+    polygon, chords inside the circle), however short the sight radius."""
+    from shapely.geometry import Polygon
+
+    bearings = np.linspace(0.5, -0.5, 64)[None]
+    hull = visual_hull_of_scanlines([[0.0, 0.0]], bearings, np.zeros((1, 64), bool),
+                                    box(-3, -3, 3, 3), far=far)
+    empty = box(-3, -3, 3, 3).difference(hull)
+    half = 0.5 * (1.0 + 1.0 / 63)                     # column edges: half a step past the ends
+    arc = np.linspace(-half, half, 9)
+    sector = far * np.c_[np.cos(arc), np.sin(arc)]
+    inscribed = Polygon([(0, 0), *sector])            # the sector's polygon, chords inside
+    assert farthest(empty, (0.0, 0.0)) <= far + 1e-12     # the overlays snap to 6e-13 m
+    assert inscribed.difference(empty).area < 1e-12 * far**2
