@@ -689,3 +689,63 @@ def test_optimal_subset_is_the_first_within_tol_of_the_smallest_whatever_the_blo
     masks = ~np.eye(4, dtype=bool)                 # cell c is left uncovered by camera c alone
     cov = Coverage(masks, np.array([1.0 + 5 * tol, 1.0, 1.0 - 0.8 * tol, 1.0 - 1.5 * tol]))
     assert optimal_subset(cov, 1, tol=tol) == [2]
+
+
+# --- the polygon path against the paper's algorithm ---------------------------------------
+
+L_ROOM = box(0, 0, 4, 4).difference(box(2, 2, 4, 4))       # not convex: the overlay path
+L_XY = np.array([[0.0, 1.0], [0.0, 3.0], [1.0, 0.0], [3.0, 0.0], [4.0, 1.0], [2.0, 3.0],
+                 [1.0, 4.0], [3.0, 2.0], [0.0, 0.2], [3.8, 0.0]])
+L_YAW = np.array([0.0, -0.3, np.pi / 2, 1.9, np.pi, -np.pi / 2 - 0.2, -np.pi / 2, np.pi + 0.4,
+                  0.7, 2.4])
+L_EST = np.array([[0.7, 0.8], [1.5, 2.9], [3.1, 1.2], [1.4, 1.6]])
+
+
+def paper_incremental(wedges, room, current, m):
+    """Section 4.5 by brute force: m times remove the camera whose removal leaves the
+    smallest hull, then m times add the one that gives the smallest hull."""
+    s = sorted(current)
+    for _ in range(m):
+        s.pop(int(np.argmin([hull_from_wedges(wedges, room, [c for c in s if c != r]).area for r in s])))
+    for _ in range(m):
+        cand = [c for c in range(len(wedges)) if c not in s]
+        s.append(cand[int(np.argmin([hull_from_wedges(wedges, room, s + [c]).area for c in cand]))])
+    return sorted(s)
+
+
+@pytest.mark.parametrize("current, m", [([0, 1, 2, 3], 1), ([0, 1, 2, 3], 2), ([5, 6, 8, 9], 2)])
+def test_incremental_in_a_non_convex_room_is_the_papers_remove_then_add(current, m):
+    """In an L-shaped room the incremental tasker swaps m cameras as section 4.5 says (not a
+    fresh greedy choice, which is another set here)."""
+    w = free_wedges_from_discs(L_XY, L_YAW, np.pi, L_EST, R, L_ROOM, strict=False)
+    got = choose_cameras("incremental", 4, L_XY, L_YAW, np.pi, L_EST, R, L_ROOM, current=current, m=m)
+    assert got.tolist() == paper_incremental(w, L_ROOM, current, m)
+    greedy = choose_cameras("greedy", 4, L_XY, L_YAW, np.pi, L_EST, R, L_ROOM)
+    assert greedy.tolist() != got.tolist()
+
+
+def test_a_radius_per_estimate_is_accepted():
+    """radius may be a (p,) array (docs), for any p: equal radii choose as the scalar does."""
+    xy, yaw, c = drop(3, n=10, m=3)
+    for tasker in ("optimal", "greedy", "incremental"):
+        one = choose_cameras(tasker, 3, xy, yaw, np.pi, c, R, ROOM, current=[0, 1, 2])
+        each = choose_cameras(tasker, 3, xy, yaw, np.pi, c, np.full(3, R), ROOM, current=[0, 1, 2])
+        assert each.tolist() == one.tolist(), tasker
+    with pytest.raises(ValueError, match="radius"):
+        choose_cameras("greedy", 3, xy, yaw, np.pi, c, np.full(2, R), ROOM)
+
+
+def test_incremental_tasker_defaults_are_the_papers_one_swap_every_frame():
+    """IncrementalTasker(k): m = 1 and an update on every frame (the paper's setting);
+    k = 1 is a valid size and a negative frame index is refused."""
+    xy, yaw, c = drop(9, n=12, m=4)
+    tasker = IncrementalTasker(4)
+    first = tasker.step(0, xy, yaw, np.pi, c, R, ROOM)
+    moved = -c[:, ::-1]
+    expect = choose_cameras("incremental", 4, xy, yaw, np.pi, moved, R, ROOM, current=first, m=1)
+    assert expect.tolist() != first.tolist()
+    assert tasker.step(1, xy, yaw, np.pi, moved, R, ROOM).tolist() == expect.tolist()
+    one = IncrementalTasker(1).step(0, xy, yaw, np.pi, c, R, ROOM)
+    assert one.tolist() == choose_cameras("greedy", 1, xy, yaw, np.pi, c, R, ROOM).tolist()
+    with pytest.raises(ValueError, match="frame_index"):
+        tasker.step(-1, xy, yaw, np.pi, c, R, ROOM)
