@@ -128,3 +128,20 @@ def test_union_areas_do_not_depend_on_where_the_origin_is(offset):
     moved = (np.arange(9), apex + offset, t0, t1)
     got = UnionAreas(convex_ring(affinity.translate(room, *offset)), moved, 9, 40.0)(sets)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * room.area)
+
+
+def test_union_areas_of_a_room_whose_ring_repeats_a_vertex():
+    """A ring may repeat a vertex (a zero-length edge, as drawn rooms can have): the areas
+    are the room's all the same (the zero-length edge's normal would be 0 / 0)."""
+    from shapely.geometry import Polygon
+
+    from tasking.fan import UnionAreas, convex_ring
+
+    room = Polygon([(0, 0), (3, 0), (3, 0), (3, 2), (0, 2), (0, 2)])
+    rng = np.random.default_rng(11)
+    apex = np.r_[[[1.0, 0.0], [3.0, 0.0], [0.0, 1.0]], rng.uniform(0.2, 1.8, (3, 2))]
+    t0 = np.r_[0.0, np.pi / 2, -np.pi / 2, rng.uniform(-np.pi, np.pi, 3)]
+    cones = (np.arange(6), apex, t0, t0 + np.r_[1.0, 0.8, 2.0, rng.uniform(0.2, 1.5, 3)])
+    sets = rng.random((8, 6)) < 0.5
+    got = UnionAreas(convex_ring(room), cones, 6, 20.0)(sets)
+    np.testing.assert_allclose(got, _union_reference(room, cones, sets, 20.0), rtol=0, atol=1e-9)
