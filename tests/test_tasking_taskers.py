@@ -749,3 +749,31 @@ def test_incremental_tasker_defaults_are_the_papers_one_swap_every_frame():
     assert one.tolist() == choose_cameras("greedy", 1, xy, yaw, np.pi, c, R, ROOM).tolist()
     with pytest.raises(ValueError, match="frame_index"):
         tasker.step(-1, xy, yaw, np.pi, c, R, ROOM)
+
+
+def test_cluster_axes_return_the_first_of_two_twin_solutions_whatever_the_kmeans_seed():
+    """Of a solution and its twin turned by pi / 2 (equal inertia), the one whose centres
+    (largest cluster first) come first is returned, whichever k-means found: k-means seeds
+    stand in for the rounding of other thread counts."""
+    for s in (3, 4, 5):
+        axes = pair_axes(np.random.default_rng(s).uniform(-0.8, 0.8, (5, 2)))
+        for k in (3, 4):
+            for seed in range(3):
+                centres, sizes = cluster_axes(axes, k, seed=seed)
+                twin = (centres + np.pi / 2) % np.pi
+                order = np.lexsort((twin, -sizes))
+                assert tuple(np.round(centres, 9)) <= tuple(np.round(twin[order], 9))
+
+
+def test_clustering_of_people_in_a_row_takes_each_of_the_two_axes_twice():
+    """Three people on a line give two pair axes (along it and across it), fewer than k = 4:
+    the two centres pick again in the same order, each its second camera on that axis
+    (docs), here the opposite camera of the ring: 0 and 8 look along x, 4 and 12 across."""
+    from tasking.clustering import clustering_select
+
+    xy, yaw = ring_cameras(16)
+    row = np.array([[-0.6, 0.1], [0.0, 0.1], [0.5, 0.1]])
+    centres, sizes = cluster_axes(pair_axes(row), 4, seed=0)
+    assert sizes.tolist() == [3, 3]
+    np.testing.assert_allclose(np.sort(axial_distance(centres, 0.0)), [0.0, np.pi / 2], atol=1e-9)
+    assert clustering_select(yaw, row, 4, seed=0, camera_xy=xy).tolist() == [0, 4, 8, 12]
