@@ -135,3 +135,48 @@ def test_matches_count_the_switch_frames_that_mse_averages_over():
     assert m["switches"] == 1 and m["misses"] == 1
     assert m["matches"] == 3                              # frames 0, 1 and the switch frame 3
     assert m["matches"] + m["misses"] == 4                # every object-frame is one or the other
+
+
+def test_a_constant_velocity_walk_is_tracked_without_lag():
+    """Exact detections of a person walking at constant velocity, far from the origin: the
+    constant-velocity filter's error dies out (no lag, no bias) and estimates() is where
+    the person will be at the next frame."""
+    dt = 1 / 7.5
+    truth = _walk(80, dt, [[4.0, 3.0]], [[0.6, -0.4]])
+    tracker = Tracker(TrackerParams(dt=dt))
+    for xy in truth[:-1]:
+        _, est = tracker.step(xy)
+    np.testing.assert_allclose(est, truth[-2], atol=1e-4)
+    np.testing.assert_allclose(tracker.estimates(), truth[-1], atol=1e-4)
+
+
+@pytest.mark.parametrize("accel_std, meas_std", [(0.3, 0.05), (2.0, 0.08)])
+def test_the_filter_settles_to_the_steady_state_of_the_constant_velocity_model(accel_std, meas_std):
+    """After many updates a track's covariance is the textbook steady state of the
+    discrete white-noise-acceleration model (Kalata's tracking index lam = accel_std dt^2 /
+    meas_std gives the alpha-beta gains; Bar-Shalom et al., Estimation with Applications to
+    Tracking, 6.5), per axis, with the axes uncorrelated."""
+    dt = 1 / 7.5
+    tracker = Tracker(TrackerParams(dt=dt, accel_std=accel_std, meas_std=meas_std))
+    for _ in range(300):
+        tracker.step([[3.0, 2.0]])
+    lam = accel_std * dt**2 / meas_std
+    root = np.sqrt(lam**2 + 8 * lam)
+    alpha = -(lam**2 + 8 * lam - (lam + 4) * root) / 8
+    beta = (lam**2 + 4 * lam - lam * root) / 4
+    axis = meas_std**2 * np.array([[alpha, beta / dt],
+                                   [beta / dt, beta * (alpha - beta / 2) / ((1 - alpha) * dt**2)]])
+    want = np.zeros((4, 4))
+    want[np.ix_([0, 2], [0, 2])] = want[np.ix_([1, 3], [1, 3])] = axis     # state x, y, vx, vy
+    np.testing.assert_allclose(tracker.P[0], want, rtol=1e-6, atol=1e-12)
+
+
+def test_a_confirmed_track_lives_through_max_missed_minus_one_misses():
+    """Hysteresis: a confirmed track ends on its max_missed-th consecutive miss, not before;
+    seen again after max_missed - 1 misses it goes on under its id."""
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=2, max_missed=3))
+    for _ in range(3):
+        ids, _ = tracker.step([[1.0, 1.0]])
+    for _ in range(2):
+        tracker.step(np.zeros((0, 2)))
+    assert tracker.step([[1.0, 1.0]])[0].tolist() == ids.tolist()
