@@ -93,6 +93,7 @@ def test_an_empty_parameters_file_is_the_defaults(tmp_path):
     (np.zeros((2, 24, 32, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\)"),
     (np.zeros((1, 24, 32, 3), np.float32), r"frames: expected dtype uint8"),
     (np.zeros((1, 24, 32), np.uint8), r"frames: expected shape \(n_cams, H, W, 3\)"),
+    (np.zeros((1, 24, 32, 4), np.uint8), r"frames: expected shape \(n_cams, H, W, 3\), got \(1, 24, 32, 4\)"),
     (np.zeros((1, 0, 32, 3), np.uint8), r"frames: expected non-empty images"),
 ])
 def test_bad_frames(frames, match):
@@ -115,6 +116,36 @@ def test_bad_background():
         background_model(np.zeros((1, 0, 32, 3), np.uint8))
     with pytest.raises(ValueError, match="background: not set"):
         Pipeline([cam()]).process(BG)
+    # a float64 model (np.full of 100.0) and RGBA frames are not empty-room RGB frames
+    with pytest.raises(ValueError, match=r"background: expected uint8 frames .* got float64 \(1, 1, 24, 32, 3\)"):
+        Pipeline([cam()], background=np.full((1, 24, 32, 3), 100.0))
+    with pytest.raises(ValueError, match=r"background: expected uint8 frames .* got uint8 \(1, 1, 24, 32, 4\)"):
+        background_model(np.full((1, 24, 32, 4), 100, np.uint8))
+
+
+def test_a_black_camera_is_named_among_lit_ones_with_black_pixels():
+    """Only a camera whose whole background is black is refused, and it is the one named:
+    black pixels, or a colour channel at 0 everywhere, are a lit image."""
+    cams = [scene.Camera.from_pose(n, [0, 0, 1.5], 0.0, 0.1, 32, 24, np.radians(50), [-0.1, 0, 0, 0, 0])
+            for n in (4, 7, 9)]
+    bg = np.zeros((3, 24, 32, 3), np.uint8)
+    bg[0, 5:, :, 0] = 90                               # camera 4: red only, its top rows black
+    bg[2, 12, 20] = (0, 1, 0)                          # camera 9: one dim green pixel
+    with pytest.raises(ValueError, match="background: camera 7 sees all black"):
+        Pipeline(cams, background=bg)
+    bg[1, :, :, 2] = 200                               # camera 7 lit: blue only
+    assert Pipeline(cams, background=bg).background.shape == (3, 24, 32, 3)
+
+
+def test_the_background_model_cannot_be_changed_from_outside():
+    """background_model's result and Pipeline.background are read-only (a write would
+    change what every later frame is compared with)."""
+    model = background_model(np.stack([BG, BG + 1]))            # means of 100.5: kept as float32
+    assert model.dtype == np.float32 and not model.flags.writeable
+    for bg in (model, BG):
+        pipe = Pipeline([cam()], background=bg)
+        with pytest.raises(ValueError, match="read-only"):
+            pipe.background[0, 0, 0] = 0
 
 
 def test_bad_labels_and_cameras():

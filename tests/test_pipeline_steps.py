@@ -124,6 +124,26 @@ def test_angle_terms_refuse_mismatched_buffers():
         terms.mask(frames, np.zeros((2, 6, 5), np.uint8)[:, :4])
     with pytest.raises(ValueError, match="frames: expected"):
         terms.mask(frames[:1], np.zeros((2, 4, 5), np.uint8))
+    # the compiled pass does not check bounds: a buffer of other cameras, columns or type is refused
+    for out in (np.zeros((3, 4, 5), np.uint8), np.zeros((2, 4, 6), np.uint8), np.zeros((2, 4, 5), np.int16)):
+        with pytest.raises(ValueError, match="out: expected C-contiguous"):
+            terms.mask(frames, out)
+
+
+def test_a_whole_valued_background_beyond_8_bits_is_not_wrapped():
+    """A float32 model of whole numbers outside 0..255 (a model scaled or offset elsewhere)
+    is compared as it is: wrapped around to uint8 levels it would equal the frame."""
+    from pipeline.foreground import AngleTerms
+
+    for v in (-100.0, 256.0, 356.0):
+        bg = np.full((1, 1, 4, 3), 100.0, np.float32)
+        bg[0, 0, 1:3, 0] = v
+        frames = np.full((1, 1, 4, 3), 100, np.uint8)
+        frames[0, 0, :, 0] = int(v) % 256                       # the wrapped level, in every column
+        out = np.zeros((1, 1, 4), np.uint8)
+        AngleTerms(bg, 5.0, 10.0, 20.0).mask(frames, out)
+        np.testing.assert_array_equal(out[0, 0], 255 * angle_formula(frames, bg, 5.0, 10.0, 20.0)[0, 0])
+        assert out[0, 0, 1:3].tolist() == [255, 255]
 
 
 def test_opening_removes_specks_keeps_blocks_and_edges():
@@ -142,6 +162,20 @@ def test_opening_removes_specks_keeps_blocks_and_edges():
         ref = np.stack([ndimage.binary_opening(x, np.ones((min(k, 13),) * 2), border_value=0) for x in m])
         np.testing.assert_array_equal(open_masks(m, k), ref)
     assert open_masks(m, 9)[1].all() and not open_masks(m, 11).any()
+
+
+@pytest.mark.parametrize("shape", [(7, 12), (12, 7)])
+def test_a_kernel_as_tall_or_as_wide_as_the_mask_fits_it_once(shape):
+    """An opening with a kernel of the mask's full height (or width) keeps what a square of
+    that size covers, as scipy's opening does; one larger always empties the mask."""
+    k = min(shape)
+    m = np.ones((2,) + shape, bool)
+    m[1, shape[0] // 2, shape[1] // 2] = False                  # in every k x k square: none fits now
+    ref = np.stack([ndimage.binary_opening(x, np.ones((k, k)), border_value=0) for x in m])
+    out = open_masks(m, k)
+    np.testing.assert_array_equal(out, ref)
+    assert out[0].all() and not out[1].any()
+    assert not open_masks(m, k + 2).any()
 
 
 # --- rectification and the bearing map -------------------------------------------------
