@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from shapely.geometry import Point, box
+from shapely.geometry import MultiPolygon, Point, Polygon, box
 
 from scene.motion import circle_polygon, random_drop, random_waypoint
 
@@ -124,3 +124,131 @@ def test_any_head_on_pair_turns_right(theta, offset):
         lateral = heading[0] * rel[:, 1] - heading[1] * rel[:, 0]
         assert np.all(lateral <= 1e-9)
         assert lateral.min() < -0.03
+
+
+def test_circle_polygon_is_a_counter_clockwise_circle_about_its_centre():
+    c = circle_polygon(0.5, 12, center=(2.0, -1.0))
+    xy = np.asarray(c.exterior.coords)[:-1]
+    np.testing.assert_allclose(np.hypot(xy[:, 0] - 2.0, xy[:, 1] + 1.0), 0.5)
+    np.testing.assert_allclose(xy[0], [2.5, -1.0])                 # the first vertex at angle 0
+    assert c.exterior.is_ccw
+    np.testing.assert_allclose([c.centroid.x, c.centroid.y], [2.0, -1.0], atol=1e-12)
+
+
+@pytest.mark.parametrize("radii", [[0.1, 0.0], [0.1, np.nan], [np.inf], [[0.1, 0.1]]])
+def test_radii_must_be_finite_and_positive(radii):
+    with pytest.raises(ValueError, match="radii: expected"):
+        random_drop(CIRCLE, radii, np.random.default_rng(0))
+    with pytest.raises(ValueError, match="radii: expected"):
+        random_waypoint(CIRCLE, radii, 5, 0.1, 1.0, np.random.default_rng(0))
+
+
+@pytest.mark.parametrize("room", [Polygon(), Polygon([(0, 0), (1, 1), (1, 0), (0, 1)]), CIRCLE.exterior,
+                                  MultiPolygon([box(0, 0, 1, 1), box(2, 0, 3, 1)])])
+def test_the_room_must_be_one_valid_polygon(room):
+    """Empty, self-crossing (a bow tie), a ring or two rooms are refused before any drawing."""
+    with pytest.raises(ValueError, match="room: expected a valid, non-empty shapely Polygon"):
+        random_drop(room, [0.1], np.random.default_rng(0))
+
+
+def _walk_past_standing(monkeypatch, initial, goal, n_steps):
+    """Person 1 (0.1 m, 1 m/s, 0.1 s steps) walks from initial[0] to ``goal``; the others stand still."""
+    from scene import motion
+
+    dests = iter([np.asarray(goal, float)])
+    standing = {i: np.asarray(p, float) for i, p in enumerate(initial[1:], 1)}
+    calls = {"n": 0}
+
+    def sample(region, rng, tries):          # first the walker's goal, then the standing people's places
+        calls["n"] += 1
+        return next(dests, None) if calls["n"] == 1 else standing[(calls["n"] - 2) % len(standing) + 1]
+
+    monkeypatch.setattr(motion, "_sample_in", sample)
+    m = len(initial)
+    return random_waypoint(CIRCLE, [0.1] * m, n_steps, 0.1, [1.0] + [0.0] * (m - 1), np.random.default_rng(0),
+                           initial=np.asarray(initial, float))
+
+
+def test_a_walker_keeps_its_line_until_within_two_steps_of_touching_then_turns_right(monkeypatch):
+    """Gaps 0.55, 0.45, 0.35, 0.25 m to the person standing in the way: straight on; at
+    0.15 m (under 2 steps of 0.1 m) the next step is the tangent, turned clockwise."""
+    pos = _walk_past_standing(monkeypatch, [[-0.75, 0.0], [0.0, 0.0]], [0.75, 0.0], 7)
+    np.testing.assert_allclose(pos[:5, 0], np.column_stack([-0.75 + 0.1 * np.arange(5), np.zeros(5)]), atol=1e-12)
+    np.testing.assert_allclose(pos[5, 0], [-0.35, -0.1], atol=1e-12)
+    np.testing.assert_array_equal(pos[:, 1], 0.0)
+
+
+def test_a_walker_steps_around_the_nearest_of_two_people_in_its_way(monkeypatch):
+    """Both are within two steps of touching it and ahead; it turns clockwise from the direction
+    towards the nearer one (gap 0.116 m against 0.19 m)."""
+    a, near, far = np.array([-0.5, 0.0]), np.array([-0.2, 0.1]), np.array([-0.2, -0.25])
+    pos = _walk_past_standing(monkeypatch, [a, near, far], [0.8, 0.0], 2)
+    u = (near - a) / np.linalg.norm(near - a)
+    np.testing.assert_allclose(pos[1, 0], a + 0.1 * np.array([u[1], -u[0]]), atol=1e-12)
+
+
+def test_the_first_position_is_the_initial_one_and_progress_counts_steps():
+    initial = np.array([[0.0, 0.0], [0.5, 0.0]])
+    ticks = []
+    pos = random_waypoint(CIRCLE, [0.1, 0.1], 6, 0.1, 1.0, np.random.default_rng(0), initial=initial,
+                          progress=ticks.append)
+    np.testing.assert_array_equal(pos[0], initial)
+    assert ticks == [1] * 5
+    one = random_waypoint(CIRCLE, [0.1, 0.1], 1, 0.1, 1.0, np.random.default_rng(0), initial=initial)
+    np.testing.assert_array_equal(one, initial[None])
+    still = random_waypoint(CIRCLE, [0.1, 0.1], 4, 0.1, 0.0, np.random.default_rng(0), initial=initial)
+    np.testing.assert_array_equal(still, np.broadcast_to(initial, (4, 2, 2)))
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"n_steps": 0}, "n_steps: expected an integer >= 1, got 0"),
+    ({"speed": -0.1}, "speed: expected finite numbers >= 0"),
+    ({"speed": [1.0, np.nan]}, "speed: expected finite numbers >= 0"),
+    ({"initial": [[0.0, 0.0]]}, r"initial: expected finite numbers of shape \(2, 2\)"),
+    ({"initial": [[0.0, 0.0], [0.5, np.nan]]}, r"initial: expected finite numbers of shape \(2, 2\)"),
+])
+def test_bad_walk_arguments(kwargs, match):
+    args = {"n_steps": 5, "speed": 1.0, "initial": None} | kwargs
+    with pytest.raises(ValueError, match=match):
+        random_waypoint(CIRCLE, [0.1, 0.1], args["n_steps"], 0.1, args["speed"], np.random.default_rng(0),
+                        initial=args["initial"])
+
+
+def test_max_tries_must_be_at_least_one():
+    assert random_drop(CIRCLE, [0.1], np.random.default_rng(0), max_tries=1).shape == (1, 2)
+    with pytest.raises(ValueError, match="max_tries: expected an integer >= 1, got 0"):
+        random_drop(CIRCLE, [0.1], np.random.default_rng(0), max_tries=0)
+
+
+@pytest.mark.parametrize("patience", [3, 20])
+def test_a_boxed_in_walker_picks_a_new_destination_after_patience_blocked_steps(monkeypatch, patience):
+    """Four people stand 0.01 m from it on all sides: its steps are cut to nothing, and every
+    ``patience`` steps it gives up its destination and draws a new one (the standing people,
+    at speed 0, never count as blocked nor draw one)."""
+    from scene import motion
+
+    steps, drawn = [], []
+    monkeypatch.setattr(motion, "_sample_in", lambda region, rng, tries: (drawn.append(len(steps)),
+                                                                           np.array([0.8, 0.0]))[1])
+    ring = 0.21 * np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    initial = np.vstack([[0.0, 0.0], ring])
+    pos = random_waypoint(CIRCLE, [0.1] * 5, 2 * patience + 2, 0.1, [1.0, 0, 0, 0, 0], np.random.default_rng(0),
+                          initial=initial, patience=patience, progress=steps.append)
+    assert drawn == [0] * 5 + [patience - 1, 2 * patience - 1]     # the walker's draws, in steps patience, 2 patience
+    np.testing.assert_array_equal(pos[:, 1:], np.broadcast_to(ring, (len(pos), 4, 2)))
+    assert np.abs(pos[:, 0]).max() < 0.01
+
+
+def test_a_free_walker_keeps_its_destination_until_it_arrives(monkeypatch):
+    """Alone, with patience 3, it walks 1.5 m in 12 steps of 0.125 m and draws its next
+    destination only on arriving (walking is never being blocked)."""
+    from scene import motion
+
+    steps, drawn = [], []
+    goals = iter([np.array([0.75, 0.0]), np.array([0.75, 0.5])])
+    monkeypatch.setattr(motion, "_sample_in", lambda region, rng, tries: (drawn.append(len(steps)), next(goals))[1])
+    pos = random_waypoint(CIRCLE, [0.1], 14, 0.125, 1.0, np.random.default_rng(0), initial=[[-0.75, 0.0]],
+                          patience=3, progress=steps.append)
+    assert drawn == [0, 11]                                        # at the start, then in step 12
+    np.testing.assert_array_equal(pos[:13, 0], np.column_stack([-0.75 + 0.125 * np.arange(13), np.zeros(13)]))
+    np.testing.assert_array_equal(pos[13, 0], [0.75, 0.125])
