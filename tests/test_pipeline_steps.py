@@ -473,6 +473,22 @@ def test_rle_bits_of_640_columns():
     assert scanline_bits(s) == 50
 
 
+@pytest.mark.parametrize("width, bits", [(1, 1), (2, 2), (3, 2), (511, 9), (512, 10), (640, 10), (1023, 10),
+                                         (1024, 11)])
+def test_a_run_length_takes_the_bits_of_the_width_itself(width, bits):
+    """Run lengths go from 0 to W: W + 1 values, ceil(log2(W + 1)) bits (a 512-column run needs 10)."""
+    from pipeline import bits_per_run
+
+    assert bits_per_run(width) == bits
+    assert 2 ** (bits - 1) <= width < 2 ** bits
+
+
+@pytest.mark.parametrize("runs", [[3, -1, 2], [[2, 2]], [1, 2]])
+def test_rle_decode_refuses_runs_that_do_not_make_the_width(runs):
+    with pytest.raises(ValueError, match="runs: expected non-negative run lengths summing to width 4"):
+        rle_decode(runs, 4)
+
+
 # --- metrics ---------------------------------------------------------------------------
 
 def test_metrics_on_known_confusion():
@@ -486,6 +502,27 @@ def test_metrics_on_known_confusion():
     assert m["f1"] == pytest.approx(2 * 0.5 * (2 / 3) / (0.5 + 2 / 3))
     assert m["pwc"] == pytest.approx(30.0)
     assert m["specificity"] == pytest.approx(5 / 7)
+
+
+def test_confusion_counts_each_kind_once():
+    pred = np.array([[1, 1, 1, 1, 1, 0, 0], [0, 0, 0, 0, 0, 0, 1]], bool)
+    true = np.array([[1, 0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1, 0]], bool)
+    c = confusion(pred, true)
+    assert (c["tp"], c["fp"], c["fn"], c["tn"]) == (1, 5, 2, 6)
+    per_row = confusion(pred, true, axis=1)
+    assert [per_row[k].tolist() for k in ("tp", "fp", "fn", "tn")] == [[1, 0], [4, 1], [1, 1], [1, 5]]
+
+
+@pytest.mark.parametrize("counts, expected", [
+    # a single column of each kind: the ratios are 0 or 1, not the empty-denominator 1
+    ((0, 0, 1, 0), dict(recall=0.0, precision=1.0, f1=0.0, pwc=100.0, specificity=1.0)),
+    ((0, 1, 0, 0), dict(recall=1.0, precision=0.0, f1=0.0, pwc=100.0, specificity=0.0)),
+    ((0, 3, 2, 5), dict(recall=0.0, precision=0.0, f1=0.0, pwc=50.0, specificity=5 / 8)),    # P + R = 0
+    ((1, 3, 1, 5), dict(recall=0.5, precision=0.25, f1=1 / 3, pwc=40.0, specificity=5 / 8)),  # P + R < 1
+    ((0, 0, 0, 0), dict(recall=1.0, precision=1.0, f1=1.0, pwc=0.0, specificity=1.0)),
+])
+def test_metrics_of_few_columns(counts, expected):
+    assert cdnet_metrics(*counts) == pytest.approx(expected)
 
 
 def test_metrics_empty_cases():
