@@ -132,3 +132,22 @@ def test_lens_errors_show_readable_numbers():
         with pytest.raises(ValueError, match=r"camera 1: its lens distortion \[.*1e\+300.*\] folds over") as info:
             check_rectifiable([cam])
         assert not re.search(r"\d{12}", str(info.value)) and len(str(info.value)) < 250, str(info.value)
+
+
+def test_every_pixel_of_a_lens_that_folds_beyond_them_gets_its_ray_before_the_fold():
+    """An 8 x 59 camera with k2 = 0.0625, k3 = -1/256: OpenCV's iterations leave 20 of its
+    pixels up to 17 px off, some towards a second ray beyond the lens's fold that projects
+    onto the same pixel. Every pixel's ray projects back onto it (cv2.projectPoints, 1e-9 px)
+    and the projection keeps its orientation there (a positive determinant of its
+    derivative, by central differences): the ray before the fold, the one the camera sees."""
+    from scene.camera import undistort_points
+
+    K = np.array([[7.32195089, 0.0, 3.5], [0.0, 7.32195089, 29.0], [0.0, 0.0, 1.0]])
+    dist = np.array([0.0, 0.0625, 0.0, 0.0, -0.00390625])
+    uv = _pixel_grid(8, 59)
+    rays = undistort_points(uv, K, dist, eps=1e-10)
+    assert np.abs(_project(rays, K, dist) - uv).max() < 1e-9
+    h = 1e-6
+    du = (_project(rays + [h, 0], K, dist) - _project(rays - [h, 0], K, dist)) / (2 * h)
+    dv = (_project(rays + [0, h], K, dist) - _project(rays - [0, h], K, dist)) / (2 * h)
+    assert (du[:, 0] * dv[:, 1] - du[:, 1] * dv[:, 0]).min() > 0

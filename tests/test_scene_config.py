@@ -66,6 +66,19 @@ def test_calibration_projects_like_opencv():
     assert abs(u - cam.K[0, 2]) < 1.0 and v < cam.K[1, 2]
 
 
+def test_a_camera_from_a_pose_projects_as_the_pinhole_formula():
+    """Level, looking along +x, 90 degrees across 640 x 480: f = 320 px, the principal point
+    at the image's centre (319.5, 239.5), square pixels, no skew."""
+    cam = Camera.from_pose(1, [1.0, 2.0, 1.5], 0.0, 0.0, 640, 480, np.radians(90), np.zeros(5))
+    ahead = np.array([[3.0, 0.0, 0.0], [3.0, -1.2, 0.6], [2.0, 0.5, -1.0]])   # forward, right, up of the camera
+    x, y, z = -ahead[:, 1], -ahead[:, 2], ahead[:, 0]                          # camera right, down, forward
+    want = np.column_stack([320 * x / z + 319.5, 320 * y / z + 239.5])
+    homogeneous = (cam.K @ (cam.R @ (cam.center_world + ahead).T + cam.t[:, None])).T   # the renderer's K @ X
+    np.testing.assert_allclose(homogeneous[:, :2] / homogeneous[:, 2:], want, atol=1e-9)
+    uv = cv2.projectPoints(cam.center_world + ahead, cv2.Rodrigues(cam.R)[0], cam.t, cam.K, cam.dist)[0][:, 0]
+    np.testing.assert_allclose(uv, want, atol=1e-9)
+
+
 def test_rotation_is_orthonormal():
     R = rotation_from_yaw_pitch(0.7, 0.3)
     assert np.allclose(R @ R.T, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)
