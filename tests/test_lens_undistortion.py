@@ -124,6 +124,21 @@ def test_a_lens_that_does_not_fold_is_accepted_where_opencv_stopped_short():
     assert np.abs(_project(rays[:, :2], cam.K, cam.dist) - np.column_stack([u.ravel(), v.ravel()])).max() < 1e-6
 
 
+def test_a_lens_whose_image_reaches_past_its_widest_ray_says_so():
+    """k1 = -0.6 on the lab's 49-degree lens: r (1 - 0.6 r^2) peaks inside the image, so its
+    corners have no ray at all; the error says that a pixel does not come back (the fold
+    itself lies beyond the rays that the image's pixels have)."""
+    from pipeline.rectify import check_lens
+
+    cam = dataclasses.replace(load_scene("lab").cameras[0], dist=np.array([-0.6, 0.0, 0.0, 0.0, 0.0]))
+    r = np.linspace(0, 2, 20001)
+    peak = (r * (1 - 0.6 * r**2)).max() * cam.K[0, 0]                  # pixels from the principal point
+    assert np.hypot(cam.K[0, 2] + 0.5, cam.K[1, 2] + 0.5) > peak        # the corner lies beyond it
+    with pytest.raises(ValueError, match=r"folds over inside its image \(a pixel undistorted and distorted "
+                                         r"again lands [\d.]+ pixels away\)"):
+        check_lens(cam)
+
+
 def test_lens_errors_show_readable_numbers():
     from pipeline.rectify import check_rectifiable
 

@@ -649,3 +649,24 @@ def test_truth_kernels_equal_their_numpy_formulas(n, h, extra, w, dtype, seed):
     count_columns(rect, counts, truth)
     np.testing.assert_array_equal(counts, (rect >= 128).sum(axis=1))
     np.testing.assert_array_equal(truth, (rect & 1).any(axis=1))
+
+
+def test_a_rig_rectifies_each_camera_as_it_would_alone():
+    """Cameras of one rig pitched differently need different output heights: the rig's is the
+    tallest, and each camera's rectified image is the one it has alone, zero below."""
+    from pipeline import Rectifier
+
+    cams = [scene.Camera.from_pose(n, [0.0, 0.0, 1.5], 0.3 * n, np.radians(pitch), 40, 30, np.radians(50),
+                                   [-0.1, 0.01, 0, 0, 0]) for n, pitch in ((1, 0.0), (2, 35.0), (3, -10.0))]
+    rig = Rectifier.build(cams)
+    rng = np.random.default_rng(0)
+    masks = rng.random((3, 30, 40)) < 0.5
+    masks[:, 5:25, 10:30] = True
+    out = rig.rectify(masks)
+    heights = []
+    for i, cam in enumerate(cams):
+        alone = Rectifier.build([cam])
+        heights.append(alone.out_height)
+        np.testing.assert_array_equal(out[i, :alone.out_height], alone.rectify(masks[i:i + 1])[0])
+        assert not out[i, alone.out_height:].any()
+    assert rig.out_height == max(heights) > min(heights)
