@@ -670,3 +670,29 @@ def test_a_rig_rectifies_each_camera_as_it_would_alone():
         np.testing.assert_array_equal(out[i, :alone.out_height], alone.rectify(masks[i:i + 1])[0])
         assert not out[i, alone.out_height:].any()
     assert rig.out_height == max(heights) > min(heights)
+
+
+@pytest.mark.parametrize("pitch_deg, dist", [(15.0, [-0.18, 0.06, 0.0, 0.0, 0.0]), (-8.0, [0.1, -0.05, 0.002, -0.003, 0.0]),
+                                            (0.0, [0.0] * 5)])
+def test_a_full_mask_rectifies_to_the_rays_that_land_on_the_raw_image(pitch_deg, dist):
+    """Each output pixel's level ray, turned back into the camera and projected through its
+    lens (cv2.projectPoints), lands on the raw image (its pixels' outer edges included) exactly
+    where a raw mask of ones rectifies to one; pixels within float32 rounding of the image's
+    edge may go either way."""
+    from pipeline import Rectifier
+    from pipeline.rectify import level_rotation
+
+    cam = scene.Camera.from_pose(1, [0.0, 0.0, 1.5], 0.4, np.radians(pitch_deg), 48, 36, np.radians(55), dist)
+    rect = Rectifier.build([cam])
+    got = rect.rectify(np.ones((1, 36, 48), bool))[0]
+    r, c = np.mgrid[0:rect.out_height, 0:rect.width]
+    rays = np.column_stack([c.ravel(), r.ravel(), np.ones(c.size)]) @ np.linalg.inv(rect.K_virtual[0]).T
+    rays = rays @ level_rotation(cam)                                  # level frame -> camera frame
+    ahead = rays[:, 2] > 0
+    uv = np.full((c.size, 2), np.inf)
+    uv[ahead] = cv2.projectPoints(rays[ahead], np.zeros(3), np.zeros(3), cam.K, cam.dist)[0].reshape(-1, 2)
+    lo, hi = np.array([-0.5, -0.5]), np.array([cam.width - 0.5, cam.height - 0.5])
+    want = np.all((uv >= lo) & (uv <= hi), axis=1).reshape(got.shape)
+    near_edge = np.any(np.abs(np.concatenate([uv - lo, uv - hi], 1)) < 1e-3, axis=1).reshape(got.shape)
+    assert want.sum() > 0.8 * want.size
+    np.testing.assert_array_equal(got[~near_edge], want[~near_edge])
