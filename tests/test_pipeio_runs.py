@@ -38,3 +38,41 @@ def test_labels_that_do_not_pair_with_the_frames_are_refused(sequence):
     with pytest.raises(ValueError, match=r"^labels: more batches than the 5 frames; expected one per frame$"):
         run_sequence(pipe, frames[3:], labels)             # frames skipped, labels not: misaligned
     assert run_sequence(pipe, iter(frames), iter(labels)).gt_scanlines.shape == (8, 2, 160)
+
+
+def test_a_runs_metrics_are_its_frames_counted_plainly(sequence):
+    """Every number of RunResult.metrics() recomputed from the pipeline's steps taken one by
+    one: scanlines and true scanlines with numpy counts, the foreground (colour angle, then a
+    scipy opening) against labels > 0 per camera, and the run lengths of rle_encode."""
+    from scipy import ndimage
+
+    from pipeline import colour_angle_foreground, rle_encode
+
+    cams, bg, frames, labels = sequence
+    params = PipelineParams(column_threshold=3.0, temporal_alpha=0.5)
+    result = run_sequence(Pipeline(cams, params, bg), frames, labels)
+    m = result.metrics()
+
+    plain = Pipeline(cams, params, bg)
+    scans = np.stack([plain.process(f) for f in frames])
+    gts = np.stack([plain.ground_truth(lab)[1] for lab in labels])
+    np.testing.assert_array_equal(result.scanlines, scans)
+    np.testing.assert_array_equal(result.gt_scanlines, gts)
+    assert (m["frames"], m["cameras"], m["width"], m["raw_bits"]) == (8, 2, 160, 160)
+    runs = [len(rle_encode(s)) * 8 for s in scans.reshape(-1, 160)]       # 8 bits code 0..160
+    assert (m["rle_bits_mean"], m["rle_bits_max"]) == (pytest.approx(np.mean(runs)), max(runs))
+    assert (m["tp"], m["fp"], m["fn"]) == (np.sum(scans & gts), np.sum(scans & ~gts), np.sum(~scans & gts))
+    assert [c["tp"] for c in m["per_camera"]] == np.sum(scans & gts, axis=(0, 2)).tolist()
+
+    model = plain.background
+    pixels = np.zeros((2, 4), int)
+    for f, lab in zip(frames, labels):
+        fg = colour_angle_foreground(f, model, params.threshold_deg, params.brightness_floor, params.dark_delta)
+        k = np.ones((params.opening_kernel,) * 2)
+        fg = np.stack([ndimage.binary_opening(x, k, border_value=0) for x in fg])
+        t = np.asarray(lab) > 0
+        pixels += np.stack([(fg & t).sum((1, 2)), (fg & ~t).sum((1, 2)), (~fg & t).sum((1, 2)),
+                            (~fg & ~t).sum((1, 2))], 1)
+    assert pixels[:, 0].min() > 0 and pixels[:, 1:3].sum() > 0                # people found, and some misses
+    np.testing.assert_array_equal(result.pixel_counts, pixels)
+    assert [m["pixel"][k] for k in ("tp", "fp", "fn", "tn")] == pixels.sum(0).tolist()

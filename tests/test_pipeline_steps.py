@@ -546,6 +546,29 @@ def test_production_matches_reference_on_lab_frames():
         np.testing.assert_array_equal(fast.process(f), ref.process(f))
 
 
+def test_step_returns_the_intermediates_of_process():
+    """Pipeline.step: the opened foreground, its rectification, the smoothed column counts
+    and the scanlines are each what the step before them gives, and the scanlines are process()'s."""
+    cams = [scene.Camera.from_pose(i + 1, [x, 0.05, 2.2], np.radians(90 + d), np.radians(15), 160, 120,
+                                   np.radians(49), [-0.18, 0.06, 0, 0, 0]) for i, (x, d) in enumerate([(1.5, -20), (5.0, 20)])]
+    bg, frames, _labels = synthetic_sequence(cams, 3, np.random.default_rng(7))
+    p = PipelineParams(temporal_alpha=0.6, column_threshold=3.0)
+    stepped, plain = Pipeline(cams, p, bg), Pipeline(cams, p, bg)
+    state = None
+    for f in frames:
+        out = stepped.step(f)
+        fg = open_masks(colour_angle_foreground(f, stepped.background, p.threshold_deg, p.brightness_floor,
+                                                p.dark_delta), p.opening_kernel)
+        np.testing.assert_array_equal(out.foreground, fg)
+        rect = stepped.rectifier.rectify(fg)
+        np.testing.assert_array_equal(out.rectified, rect)
+        assert rect.any(axis=(1, 2)).all()
+        sums = spatial_smooth(rect.sum(axis=1), p.spatial_kernel)
+        state = sums if state is None else p.temporal_alpha * sums + (1 - p.temporal_alpha) * state
+        np.testing.assert_allclose(out.smoothed, state, atol=1e-9)
+        np.testing.assert_array_equal(out.scanlines, plain.process(f))
+
+
 def test_temporal_state_and_reset():
     cam = flat_camera()
     bg = np.full((1, 48, 64, 3), 120, np.uint8)
