@@ -569,6 +569,32 @@ def test_step_returns_the_intermediates_of_process():
         np.testing.assert_array_equal(out.scanlines, plain.process(f))
 
 
+@pytest.mark.parametrize("spatial, median, opening", [(9, 11, 1), (1, 1, 15)])
+def test_at_the_width_limit_an_object_still_leaves_a_run_the_filters_keep(spatial, median, opening):
+    """Pipeline.sight_range with an object's width: out to its far radius a 10 cm object spans
+    at least w f / far rectified columns (f: the level camera's pixels per radian, fewest at its
+    centre) and w g / far raw pixels (g = raw_pixels_per_radian). That many columns, at the
+    fewest rows a new object is sent with (column_threshold / temporal_alpha), come through
+    the box and median filters, and a bar that many pixels across survives the opening.
+    (The first parameters make the columns the limit, the second the raw pixels.)"""
+    from pipeline.nearfield import raw_pixels_per_radian
+
+    cam = flat_camera()
+    p = PipelineParams(spatial_kernel=spatial, median_kernel=median, opening_kernel=opening, column_threshold=3.0,
+                       temporal_alpha=0.5)
+    near, far = Pipeline([cam], p).sight_range(1.75, object_width=0.1)
+    assert near[0] == 0.0 and far[0] < 1.0                       # the width is the limit, not the height
+    columns = int(np.floor(0.1 * Pipeline([cam], p).rectifier.K_virtual[0, 0, 0] / far[0] + 1e-9))
+    counts = np.zeros((1, 64))
+    counts[0, 20:20 + columns] = p.column_threshold / p.temporal_alpha + 1e-6
+    smoothed = p.temporal_alpha * spatial_smooth(counts, spatial)    # a new object after empty frames
+    assert median_threshold(smoothed, median, p.column_threshold).any()
+    pixels = int(np.ceil(0.1 * raw_pixels_per_radian(cam) / far[0] - 1e-9)) - 1   # pixel centres in its span
+    bar = np.zeros((1, 48, 64), bool)
+    bar[0, 5:40, 20:20 + pixels] = True
+    assert open_masks(bar, opening).any()
+
+
 def test_temporal_state_and_reset():
     cam = flat_camera()
     bg = np.full((1, 48, 64, 3), 120, np.uint8)
