@@ -584,6 +584,7 @@ def test_at_the_width_limit_an_object_still_leaves_a_run_the_filters_keep(spatia
                        temporal_alpha=0.5)
     near, far = Pipeline([cam], p).sight_range(1.75, object_width=0.1)
     assert near[0] == 0.0 and far[0] < 1.0                       # the width is the limit, not the height
+    assert not near.flags.writeable and not far.flags.writeable  # the pipeline's cached answer
     columns = int(np.floor(0.1 * Pipeline([cam], p).rectifier.K_virtual[0, 0, 0] / far[0] + 1e-9))
     counts = np.zeros((1, 64))
     counts[0, 20:20 + columns] = p.column_threshold / p.temporal_alpha + 1e-6
