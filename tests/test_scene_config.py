@@ -214,6 +214,16 @@ def test_missing_file_and_camera_validation(tmp_path):
         load_scene(tmp_path / "nope.yaml")
     with pytest.raises(ValueError, match="camera.R: expected a rotation matrix"):
         Camera(1, np.eye(3), np.zeros(5), 2 * np.eye(3), np.zeros(3), 640, 480)
+    good = np.array([[500.0, 0.0, 319.5], [0.0, 500.0, 239.5], [0.0, 0.0, 1.0]])
+    for bad in ({(0, 0): 0.0}, {(1, 1): 0.0}, {(1, 0): 0.1}, {(2, 2): 2.0}):    # no focal length, skew below, scaled
+        K = good.copy()
+        for at, value in bad.items():
+            K[at] = value
+        with pytest.raises(ValueError, match=r"camera.K: expected \[\[fx, s, cx\], \[0, fy, cy\], \[0, 0, 1\]\]"):
+            Camera(1, K, np.zeros(5), np.eye(3), np.zeros(3), 640, 480)
+    with pytest.raises(ValueError, match="camera.resolution"):
+        Camera(1, good, np.zeros(5), np.eye(3), np.zeros(3), 0, 480)
+    assert Camera(1, good, np.zeros(5), np.eye(3), np.zeros(3), 1, 1).width == 1
 
 
 @pytest.mark.parametrize("kind", ["folder", "device"])
