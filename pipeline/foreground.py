@@ -85,7 +85,8 @@ class AngleTerms:
     taken on the fly (:mod:`pipeline.angle_kernel`): nothing is precomputed per pixel.
     A background of whole levels (one clean frame, as datasets record it) is kept as
     uint8, a quarter of the bytes to read per frame, with the same results (the float32
-    terms of whole levels are exact).
+    terms of whole levels are exact). Any other is kept as float32: a read-only array
+    (``background_model``'s) as it is, a writeable one copied.
     """
 
     def __init__(self, background: np.ndarray, threshold_deg: float, brightness_floor: float,
@@ -95,6 +96,8 @@ class AngleTerms:
         self._kernel = angle_mask
         bg = np.ascontiguousarray(background, dtype=np.float32)
         whole = bg.min() >= 0 and bg.max() <= 255 and np.array_equal(np.rint(bg), bg)
+        if not whole and bg.flags.writeable and np.shares_memory(bg, background):
+            bg = bg.copy()      # the caller's own array: its writes must not change the model
         self._levels = bg.astype(np.uint8) if whole else bg       # what the compiled pass reads
         self._set_thresholds(threshold_deg, brightness_floor, dark_delta)
 

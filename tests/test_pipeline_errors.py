@@ -148,6 +148,19 @@ def test_the_background_model_cannot_be_changed_from_outside():
             pipe.background[0, 0, 0] = 0
 
 
+def test_a_writeable_float_background_is_the_callers_own_after_the_pipeline_took_it():
+    """A writeable float32 background (not of whole levels) was kept without a copy: reading
+    ``pipe.background`` made the caller's array read-only, and the caller's writes before
+    that changed the pipeline's model."""
+    mine = np.full((1, 24, 32, 3), 100.5, np.float32)
+    pipe = Pipeline([cam()], background=mine)
+    mine[0, 0, 0] = 7.0                                   # the caller reuses its buffer
+    model = pipe.background
+    assert mine.flags.writeable
+    assert not np.shares_memory(model, mine)
+    assert np.all(model == 100.5)
+
+
 def test_bad_labels_and_cameras():
     pipe = Pipeline([cam()], background=BG)
     with pytest.raises(ValueError, match=r"labels: expected shape \(1, 24, 32\)"):
