@@ -1,0 +1,149 @@
+"""testbed.wildtrack.export_episode of small hand-made episodes (no rendering): positions
+worked by hand, boxes of hand-drawn masks, frames and calibration read back with OpenCV."""
+
+import json
+import shutil
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from scene.camera import Camera
+from testbed.dataset import write_calibration
+from testbed.png import write_png
+from testbed.wildtrack import export_episode
+
+LAB = Path(__file__).parents[1] / "assets" / "scenes" / "lab.yaml"
+W, H = 64, 48                                          # pixels
+K = np.array([[40.0, 0.0, 31.5], [0.0, 40.0, 23.5], [0.0, 0.0, 1.0]])
+
+
+def make_episode(folder, positions, labels, dist=(0.05, 0.0, 0.0, 0.0, 0.0), cameras=(2, 5)):
+    """An episode folder as `camtask render` writes one (the files export reads).
+
+    positions : (frames, people, 2) metres, world frame
+    labels : {(camera number, frame): (H, W) uint8 mask, person id + 1}; other masks empty
+    """
+    frames, people = positions.shape[:2]
+    rng = np.random.default_rng(7)
+    (folder / "calibration").mkdir(parents=True)
+    for n in cameras:
+        write_calibration(folder / "calibration" / f"cam{n:02d}.yaml",
+                          Camera(n, K, np.array(dist, float), np.eye(3), np.array([-1.0, -2.0, 4.0 + n]), W, H))
+        for sub in ("frames", "masks"):
+            (folder / sub / f"cam{n:02d}").mkdir(parents=True)
+        for f in range(frames):
+            write_png(folder / "frames" / f"cam{n:02d}" / f"{f:06d}.png", rng.integers(0, 256, (H, W, 3), np.uint8))
+            write_png(folder / "masks" / f"cam{n:02d}" / f"{f:06d}.png", labels.get((n, f), np.zeros((H, W), np.uint8)))
+    rows = [f"{f},{i},{float(x)!r},{float(y)!r},0.25,1.75" for f in range(frames) for i, (x, y) in enumerate(positions[f])]
+    (folder / "people.csv").write_text("\n".join(["frame,person_id,x,y,radius,height", *rows]) + "\n")
+    (folder / "meta.json").write_text(json.dumps({"episode": 0, "cameras": list(cameras), "frames": frames,
+                                                  "people": people, "format": "png",
+                                                  "scene_yaml": LAB.read_text()}))
+    return folder
+
+
+def annotations(out, frame):
+    return json.loads((out / "annotations_positions" / f"{frame:08d}.json").read_text())
+
+
+def box(view, xmin, ymin, xmax, ymax):
+    return {"viewNum": view, "xmin": xmin, "ymin": ymin, "xmax": xmax, "ymax": ymax}
+
+
+NONE = (-1, -1, -1, -1)
+
+
+def test_the_defaults_copy_the_frames_keep_the_lens_and_box_the_masks_drawn(tmp_path):
+    positions = np.array([[[1.0126, 0.4999], [0.0, 5.7899]],
+                          [[6.7055, 0.001], [3.01, 3.01]]])
+    labels = {(2, 0): np.zeros((H, W), np.uint8), (5, 0): np.zeros((H, W), np.uint8),
+              (5, 1): np.zeros((H, W), np.uint8)}
+    labels[2, 0][0:4, 60:64] = 1                       # person 0 in the top right corner of camera 2
+    labels[5, 0][10:21, 5:10] = 1
+    labels[5, 0][14, 7] = 0                            # a hole changes no bound
+    labels[5, 0][47, 0] = 2                            # person 1: the bottom left pixel
+    labels[5, 1][5:7, 30:32] = 1
+    ep = make_episode(tmp_path / "episode_0000", positions, labels)
+    calls = []
+    out = export_episode(ep, tmp_path / "wt", progress=calls.append)     # the defaults: as `camtask export`
+    assert calls == [1] * 4                                              # one per image written
+    # positionID = x_index + 269 y_index, worked by hand: floor(1.0126 / 0.025) = 40, floor(0.4999 / 0.025) = 19
+    assert annotations(out, 0) == [
+        {"personID": 0, "positionID": 40 + 269 * 19, "views": [box(0, 60, 0, 63, 3), box(1, 5, 10, 9, 20)]},
+        {"personID": 1, "positionID": 0 + 269 * 231, "views": [box(0, *NONE), box(1, 0, 47, 0, 47)]}]
+    assert annotations(out, 1) == [
+        {"personID": 0, "positionID": 268 + 269 * 0, "views": [box(0, *NONE), box(1, 30, 5, 31, 6)]},
+        {"personID": 1, "positionID": 120 + 269 * 120, "views": [box(0, *NONE), box(1, *NONE)]}]
+    for n in (2, 5):
+        for f in (0, 1):
+            exported = cv2.imread(str(out / "Image_subsets" / f"C{n}" / f"{f:08d}.png"), cv2.IMREAD_UNCHANGED)
+            np.testing.assert_array_equal(exported, cv2.imread(str(ep / "frames" / f"cam{n:02d}" / f"{f:06d}.png")))
+        fs = cv2.FileStorage(str(out / "calibrations" / "intrinsic_zero" / f"intr_C{n}.xml"), cv2.FILE_STORAGE_READ)
+        np.testing.assert_array_equal(fs.getNode("camera_matrix").mat(), K)
+        np.testing.assert_array_equal(fs.getNode("distortion_coefficients").mat(), [[0.05, 0, 0, 0, 0]])
+        fs.release()
+    grid = json.loads((out / "grid.json").read_text())
+    assert (grid["undistorted"], grid["boxes"], grid["layout"]) == (False, "visible", "wildtrack")
+
+
+def test_an_episode_of_no_one_exports_its_frames_and_empty_annotations(tmp_path):
+    ep = make_episode(tmp_path / "episode_0000", np.zeros((2, 0, 2)), {})
+    out = export_episode(ep, tmp_path / "wt")
+    assert [annotations(out, f) for f in (0, 1)] == [[], []]
+    assert sorted(p.name for p in (out / "Image_subsets" / "C5").iterdir()) == ["00000000.png", "00000001.png"]
+
+
+def test_undistort_remaps_the_frames_and_the_border_outside_the_lens_is_black_and_no_one(tmp_path):
+    """A pincushion lens (k1 > 0): the pinhole image's corners lie outside the rendered
+    frame. They are black in the frame and no one's pixels in the masks, so a person
+    nowhere in a view still has no box there."""
+    dist = (0.3, 0.0, 0.0, 0.0, 0.0)
+    mask = np.zeros((H, W), np.uint8)
+    mask[20:28, 28:36] = 1                             # person 0 in the middle; person 1 not in view
+    ep = make_episode(tmp_path / "episode_0000", np.array([[[1.0, 1.0], [2.0, 2.0]]]), {(2, 0): mask}, dist,
+                      cameras=(2,))
+    rows, cols = np.mgrid[0:H, 0:W]
+    src = np.dstack([4 * cols, 5 * rows, 100 + cols + rows]).astype(np.uint8)   # smooth: interpolation agrees
+    write_png(ep / "frames" / "cam02" / "000000.png", src)
+    out = export_episode(ep, tmp_path / "pinhole", undistort=True)
+    got = cv2.imread(str(out / "Image_subsets" / "C2" / "00000000.png"))[..., ::-1]
+    want = cv2.undistort(src, K, np.array(dist))       # OpenCV's pinhole image of the same camera matrix
+    assert (got[0, 0] == 0).all() and (got[-1, -1] == 0).all()
+    inside = cv2.erode((want != 0).all(axis=2).astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    assert inside.mean() > 0.6 and np.abs(got.astype(int) - want)[inside].max() <= 1
+    (a0, a1) = annotations(out, 0)
+    assert a1["views"] == [box(0, *NONE)]
+    rr, cc = np.nonzero(mask)
+    pts = cv2.undistortPoints(np.c_[cc, rr].astype(float).reshape(-1, 1, 2), K, np.array(dist), P=K).reshape(-1, 2)
+    b = a0["views"][0]
+    assert np.abs(np.array([b["xmin"], b["ymin"], b["xmax"], b["ymax"]]) - np.r_[pts.min(0), pts.max(0)]).max() <= 1.5
+    fs = cv2.FileStorage(str(out / "calibrations" / "intrinsic_zero" / "intr_C2.xml"), cv2.FILE_STORAGE_READ)
+    assert not fs.getNode("distortion_coefficients").mat().any()
+    fs.release()
+
+
+def test_a_video_episode_exports_as_its_png_twin(tmp_path):
+    from testbed.lossless import VideoWriter
+
+    mask = np.zeros((H, W), np.uint8)
+    mask[3:9, 10:20] = 1
+    png = make_episode(tmp_path / "png" / "episode_0000", np.array([[[1.0, 1.0]], [[1.1, 1.0]], [[1.2, 1.0]]]),
+                       {(5, 2): mask})
+    video = tmp_path / "video" / "episode_0000"
+    shutil.copytree(png, video)
+    for n in (2, 5):
+        writer = VideoWriter(video / "frames" / f"cam{n:02d}.mkv", W, H, 10.0)
+        for f in range(3):
+            writer.write(cv2.imread(str(png / "frames" / f"cam{n:02d}" / f"{f:06d}.png"))[..., ::-1])
+        writer.close()
+        shutil.rmtree(video / "frames" / f"cam{n:02d}")
+    meta = json.loads((video / "meta.json").read_text())
+    (video / "meta.json").write_text(json.dumps(meta | {"format": "video"}))
+    a, b = export_episode(png, tmp_path / "a"), export_episode(video, tmp_path / "b")
+    for n in (2, 5):
+        for f in range(3):
+            name = f"Image_subsets/C{n}/{f:08d}.png"
+            np.testing.assert_array_equal(cv2.imread(str(b / name)), cv2.imread(str(a / name)))
+    assert [annotations(b, f) for f in range(3)] == [annotations(a, f) for f in range(3)]
+    assert annotations(b, 2)[0]["views"][1] == box(1, 10, 3, 19, 8)
