@@ -1,5 +1,7 @@
 """The dataset PNG writer: standard PNGs that OpenCV decodes to the same pixels."""
 
+import os
+import stat
 
 import blake3
 import cv2
@@ -37,7 +39,8 @@ def test_write_returns_the_files_blake3_and_bytes_repeat(tmp_path):
 
 
 @pytest.mark.parametrize("bad", [np.zeros((4, 4, 4), np.uint8), np.zeros((4, 4), np.float32),
-                                 np.zeros((0, 4), np.uint8), np.zeros(4, np.uint8)])
+                                 np.zeros((0, 4), np.uint8), np.zeros((4, 0), np.uint16), np.zeros((3, 0, 3), np.uint8),
+                                 np.zeros(4, np.uint8)])
 def test_bad_images_are_refused(bad):
     with pytest.raises(ValueError, match="image: expected"):
         encode_png(bad)
@@ -84,3 +87,24 @@ def test_write_file_replaces_a_longer_file_whole(tmp_path):
     big = np.random.default_rng(2).integers(0, 256, 3 << 20, dtype=np.uint8).tobytes()
     write_file(path, big)
     assert path.read_bytes() == big
+
+
+def test_short_writes_are_continued_where_they_stopped(tmp_path, monkeypatch):
+    """os.write may write less than it is given (a signal, a network file system)."""
+    from testbed.png import write_file
+
+    data = np.random.default_rng(3).integers(0, 256, 10_000, dtype=np.uint8).tobytes()
+    real = os.write
+    with monkeypatch.context() as m:
+        m.setattr(os, "write", lambda fd, view: real(fd, view[:999]))
+        write_file(tmp_path / "a.bin", data)
+    assert (tmp_path / "a.bin").read_bytes() == data
+
+
+def test_files_get_the_permissions_the_umask_gives(tmp_path):
+    old = os.umask(0o002)
+    try:
+        write_png(tmp_path / "a.png", np.zeros((2, 2), np.uint8))
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "a.png").stat().st_mode) == 0o664
