@@ -49,6 +49,7 @@ def test_a_file_without_the_columns_is_one_line_naming_it(tmp_path):
     ("0,,1,2,0.25,1.75", "column 'person_id', row 1: expected a whole number, got an empty field"),
     ("1.5,0,1,2,0.25,1.75", "column 'frame', row 1: expected a whole number, got 1.5"),
     ("0,0,nan,2,0.25,1.75", "column 'x', row 1: expected a finite number, got nan"),
+    ("0,0,1,2,0.25,1.75\n0,1,1,2,0.25,1.75\n0,2,inf,2,0.25,1.75", "column 'x', row 3: expected a finite number, got inf"),
 ])
 def test_a_value_that_is_not_a_position_is_one_line_naming_it(tmp_path, row, says):
     """An empty field came back as person -1, a frame 1.5 as frame 1, nan as a position."""

@@ -54,6 +54,9 @@ def export_error(ep, capsys, *extra):
     ({"frames": 0}, "meta.json: frames: expected an integer >= 1, got 0"),
     ({"cameras": [1, 1]}, ("meta.json: cameras: expected a non-empty list of distinct camera numbers >= 1, "
                            "got [1, 1]")),
+    ({"cameras": [1, 0]}, ("meta.json: cameras: expected a non-empty list of distinct camera numbers >= 1, "
+                           "got [1, 0]")),
+    ({"people": -1}, "meta.json: people: expected an integer >= 0, got -1"),
     ({"scene_yaml": None}, "meta.json: no 'scene_yaml' (expected the scene file's text)"),
 ])
 def test_a_meta_json_without_what_export_reads_is_one_line(episode, capsys, change, message):
