@@ -77,3 +77,16 @@ def test_a_dir_that_is_no_dataset_is_named_for_what_it_is(tmp_path, capsys):
              root / MANIFEST: f"DIR: {root}/manifest.json: not a folder {expected}"}
     for folder, line in lines.items():
         assert verify(capsys, folder) == (2, [], f"camtask verify: error: {line}")
+
+
+def test_an_intact_dataset_exits_0_and_says_so(tmp_path, capsys):
+    root = dataset(tmp_path / "ds", 1)
+    assert verify(capsys, root)[:2] == (0, [f"{root}: 2 episodes intact (4 files, blake3)"])
+
+
+def test_an_episode_folder_that_is_a_link_to_nowhere_is_named_so(tmp_path, capsys):
+    root = dataset(tmp_path / "ds", 1)
+    shutil.rmtree(root / "episode_0001")
+    (root / "episode_0001").symlink_to(tmp_path / "gone")
+    code, out, _ = verify(capsys, root)
+    assert code == 1 and out[0] == "episode_0001: a link to nowhere, not a folder (2 files listed)"
