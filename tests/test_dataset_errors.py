@@ -229,8 +229,8 @@ def test_manifest_writer_rewrites_no_sooner_than_its_pace_allows(tmp_path, monke
     monkeypatch.setattr(generate.time, "perf_counter", lambda: clock["now"])
     real = generate.ManifestWriter.chunks
 
-    def slow_chunks(self):                        # every rewrite takes 1 s of the fake clock
-        clock["now"] += 1.0
+    def slow_chunks(self):                        # every rewrite takes 2 s of the fake clock
+        clock["now"] += 2.0
         return real(self)
 
     monkeypatch.setattr(generate.ManifestWriter, "chunks", slow_chunks)
@@ -239,7 +239,7 @@ def test_manifest_writer_rewrites_no_sooner_than_its_pace_allows(tmp_path, monke
     entry = lambda i: {"index": i, "name": f"episode_{i:04d}", "files": {}}
     writer.add(entry(0))                          # nothing written yet: due at once
     assert listed() == [0]
-    clock["now"] += writer.PACE - 0.5             # not yet PACE x 1 s since then
+    clock["now"] += 2 * writer.PACE - 0.5         # not yet PACE x 2 s since then
     writer.add(entry(1))
     assert listed() == [0]
     clock["now"] += 0.5
@@ -249,7 +249,7 @@ def test_manifest_writer_rewrites_no_sooner_than_its_pace_allows(tmp_path, monke
     writer.flush()
     assert listed() == [0, 1, 2, 3]
     writer.flush()                                # nothing new: not rewritten
-    assert clock["now"] == 100.0 + 1 + writer.PACE + 1 + 1
+    assert clock["now"] == 100.0 + 2 + 2 * writer.PACE + 2 + 2
 
 
 def test_workers_that_do_not_see_the_output_folder_are_refused(tmp_path):

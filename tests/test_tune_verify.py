@@ -90,3 +90,30 @@ def test_an_episode_folder_that_is_a_link_to_nowhere_is_named_so(tmp_path, capsy
     (root / "episode_0001").symlink_to(tmp_path / "gone")
     code, out, _ = verify(capsys, root)
     assert code == 1 and out[0] == "episode_0001: a link to nowhere, not a folder (2 files listed)"
+
+
+@pytest.mark.parametrize("change, problem", [
+    ({"episodes_planned": -1}, "episodes_planned is -1, expected an integer >= 0"),
+    ({"episodes_planned": 1.5}, "episodes_planned is 1.5, expected an integer >= 0"),
+    ({"episode_layout": 0}, "episode_layout is 0, expected an integer >= 1"),
+    ({"episode_layout": True}, "episode_layout is True, expected an integer >= 1"),
+    ({"index": "0"}, "episodes[0] lacks an integer index and frames, a name or a files mapping"),
+    ({"frames": True}, "episodes[0] lacks an integer index and frames, a name or a files mapping"),
+    ({"index": -1}, "episodes[0]: index -1, expected >= 0"),
+])
+def test_a_manifest_with_a_value_out_of_bounds_is_not_read(tmp_path, capsys, change, problem):
+    root = dataset(tmp_path / "ds", 1)
+    m = json.loads((root / MANIFEST).read_text())
+    top = {k: v for k, v in change.items() if k.startswith("episode")}
+    m.update(top)
+    m["episodes"][0].update({k: v for k, v in change.items() if k not in top})
+    (root / MANIFEST).write_text(json.dumps(m))
+    line = f"camtask verify: error: cannot read {root / MANIFEST} (not a camtask manifest: {problem})"
+    assert verify(capsys, root) == (2, [], line)
+
+
+def test_a_manifest_at_its_bounds_is_read(tmp_path, capsys):
+    root = dataset(tmp_path / "ds", 1)
+    m = json.loads((root / MANIFEST).read_text())
+    (root / MANIFEST).write_text(json.dumps(m | {"episodes_planned": 0, "episode_layout": 1}))
+    assert verify(capsys, root)[:2] == (0, [f"{root}: 2 episodes intact (4 files, blake3)"])
