@@ -1,5 +1,7 @@
 """What a run (or --resume) removes from --out as left behind: only what runs write."""
 
+import json
+
 from testbed.generate import remove_unlisted, unlisted
 
 
@@ -18,3 +20,14 @@ def test_only_a_runs_own_names_are_removed(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "episode_0000", "episode_0007", "episode_0009", "episode_best.yaml", "episode_notes", "manifest.json",
         "notes.txt"]
+
+
+def test_by_default_the_episodes_the_manifest_lists_are_kept(tmp_path):
+    """As after a run on local workers: episodes finished after the manifest's last write go."""
+    for name in ("episode_0000", "episode_0001", "episode_0002"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "meta.json").write_text("{}")
+    listed = [{"index": i, "name": f"episode_{i:04d}", "frames": 1, "files": {"meta.json": "x"}} for i in (0, 2)]
+    (tmp_path / "manifest.json").write_text(json.dumps({"episodes": listed}))
+    remove_unlisted(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["episode_0000", "episode_0002", "manifest.json"]
