@@ -1,6 +1,7 @@
 """testbed.lossless.read_video: one ffmpeg per video, frames and errors as before."""
 
 import subprocess
+import threading
 
 import numpy as np
 import pytest
@@ -63,11 +64,11 @@ def test_not_a_video_names_the_file_and_ffmpeg_s_reason(tmp_path):
     bad.write_bytes(b"\x00" * 5000)
     with pytest.raises(ValueError, match=r"^video: cannot read .*junk.mkv'.*Invalid data") as err:
         list(read_video(bad))
-    assert "\n" not in str(err.value)
+    assert "\n" not in str(err.value) and str(err.value).endswith("(not a video ffmpeg can open, or corrupt)")
 
 
 def test_a_closed_reader_stops_its_ffmpeg(tmp_path, monkeypatch):
-    path = write(tmp_path / "v.mkv", clip(5, 64, 64))
+    path = write(tmp_path / "v.mkv", clip(5, 128, 128))     # more than a pipe holds: ffmpeg waits to write
     procs = []
     real = subprocess.Popen
 
@@ -78,8 +79,14 @@ def test_a_closed_reader_stops_its_ffmpeg(tmp_path, monkeypatch):
     monkeypatch.setattr(subprocess, "Popen", popen)
     gen = read_video(path, 5)
     next(gen)
-    gen.close()
-    assert procs and all(p.poll() is not None for p in procs)
+    closing = threading.Thread(target=gen.close)
+    closing.start()
+    closing.join(10)                          # a reader that waited for ffmpeg to finish would wait forever
+    hung = closing.is_alive()
+    for p in procs:
+        p.kill()                              # (lets a hung close return)
+    closing.join()
+    assert not hung and procs and all(p.returncode is not None for p in procs)
 
 
 def test_errors_give_ffmpeg_s_reason_without_its_pointer_addresses(tmp_path):
@@ -197,3 +204,20 @@ def test_an_ffmpeg_that_fails_without_a_word_does_not_blame_the_video(tmp_path, 
     with pytest.raises(OSError) as err:
         list(read_video(path, 2))
     assert str(err.value) == f"video: cannot read {str(path)!r}: ffmpeg ({fake}) {status} without a message"
+
+
+@pytest.mark.parametrize(("script", "error", "says"), [
+    ("kill -9 $$", OSError, "ffmpeg ({fake}) was killed by signal 9 without a message"),
+    ("exit 0", ValueError, "frame 0 ends early"),
+])
+def test_a_frame_cut_short_is_never_yielded(tmp_path, monkeypatch, script, error, says):
+    """ffmpeg stopped in the middle of a frame (killed: out of memory): its bytes are no frame."""
+    path = write(tmp_path / "v.mkv", clip(2))
+    fake = tmp_path / "ffmpeg"
+    fake.write_text(f"#!/bin/sh\nprintf 'P6\\n2 2\\n255\\nabcdefghij'\n{script}\n")   # 10 of a frame's 12 bytes
+    fake.chmod(0o755)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+    got = []
+    with pytest.raises(error) as err:
+        got.extend(read_video(path))
+    assert got == [] and str(err.value).endswith(says.format(fake=fake))

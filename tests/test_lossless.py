@@ -150,3 +150,34 @@ def test_an_ffmpeg_that_is_not_there_is_named_before_any_work(tmp_path, monkeypa
     (tmp_path / "v.mkv").write_bytes(b"\x00")
     with pytest.raises(OSError, match=r"^ffmpeg: .*bin/ffmpeg' \(IMAGEIO_FFMPEG_EXE\) is not an executable file"):
         next(read_video(tmp_path / "v.mkv"))
+
+
+def test_frame_rates_from_below_1_hz_to_1000_hz_are_taken_and_no_others():
+    from testbed.lossless import check_frame_rate
+
+    assert [check_frame_rate("video", fps) for fps in (0.5, 7.5, 1000)] == [0.5, 7.5, 1000.0]
+    for fps in (0, -7.5, 1000.5):
+        with pytest.raises(ValueError, match="at most 1000 frames per second"):
+            check_frame_rate("video", fps)
+
+
+def test_a_writer_closed_without_a_frame_is_an_error(tmp_path):
+    """ffmpeg writes a video of no frames and exits 0 (no reader takes it)."""
+    w = VideoWriter(tmp_path / "none.mkv", 64, 48, 7.5)
+    with pytest.raises(OSError) as err:
+        w.close()
+    assert str(err.value) == (f"cannot write {tmp_path / 'none.mkv'}: ffmpeg failed after 0 frames "
+                              "(exit status 0: no message)")
+
+
+def test_a_writer_s_error_counts_the_frames_it_took(tmp_path, monkeypatch):
+    fake = tmp_path / "ffmpeg"
+    fake.write_text("#!/bin/sh\ncat > /dev/null\nexit 3\n")      # takes every frame, then fails
+    fake.chmod(0o755)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+    w = VideoWriter(tmp_path / "v.mkv", 64, 48, 7.5)
+    for f in frames(2):
+        w.write(f)
+    with pytest.raises(OSError) as err:
+        w.close()
+    assert str(err.value) == f"cannot write {tmp_path / 'v.mkv'}: ffmpeg failed after 2 frames (exit status 3: no message)"
