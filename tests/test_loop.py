@@ -5,6 +5,7 @@ from itertools import pairwise
 
 import numpy as np
 import pytest
+from shapely.geometry import Point
 
 from scene import load_scene
 from tasking import visual_hull_of_scanlines
@@ -104,6 +105,44 @@ def test_bad_loop_arguments(lab_episode):
     with pytest.raises(ValueError, match="scanlines"):
         visual_hull_of_scanlines(xy[:2], source.all[0, :2, :600] * 0 + 0.1, np.zeros((2, 640), bool),
                                  scene.room.polygon)
+
+
+def test_more_or_fewer_people_keep_the_scene_s_colours_and_add_the_defaults():
+    from scene.config import default_colours
+
+    lab = load_scene("lab")
+    more, fewer = with_people(lab, 5), with_people(lab, 2)
+    assert (more.people.count, fewer.people.count) == (5, 2)
+    np.testing.assert_array_equal(more.people.colours, np.r_[lab.people.colours, default_colours(5)[3:]])
+    np.testing.assert_array_equal(fewer.people.colours, lab.people.colours[:2])
+
+
+def test_a_walk_starts_where_the_scene_places_people_and_walks_one_person_or_none():
+    import dataclasses
+
+    lab = load_scene("lab")
+    rng = np.random.default_rng(0)
+    placed = np.array([[1.0, 1.0], [3.0, 2.0], [5.0, 4.0]])
+    path = walk(dataclasses.replace(lab, people=dataclasses.replace(lab.people, positions=placed)), 4, rng)
+    assert path.shape == (4, 3, 2) and np.array_equal(path[0], placed)
+    one = walk(with_people(lab, 1), 4, rng)
+    assert one.shape == (4, 1, 2) and lab.room.polygon.contains(Point(one[0, 0]))
+    assert walk(with_people(lab, 0), 4, rng).shape == (4, 0, 2)
+
+
+def test_as_many_people_as_uint8_labels_hold_are_renderable_and_no_more():
+    import dataclasses
+
+    from render.raster import MAX_PEOPLE
+    from scene.config import default_colours
+    from testbed.episode import check_people_renderable
+
+    lab = load_scene("lab")
+    crowd = lambda n: dataclasses.replace(lab, people=dataclasses.replace(
+        lab.people, count=n, colours=default_colours(n).astype(np.uint8)))
+    check_people_renderable(crowd(MAX_PEOPLE), "--people")
+    with pytest.raises(ValueError, match=f"--people: expected at most {MAX_PEOPLE} people"):
+        check_people_renderable(crowd(MAX_PEOPLE + 1), "--people")
 
 
 def test_people_validation():
