@@ -22,7 +22,8 @@ def make_episode(folder, positions, labels, dist=(0.05, 0.0, 0.0, 0.0, 0.0), cam
     """An episode folder as `camtask render` writes one (the files export reads).
 
     positions : (frames, people, 2) metres, world frame
-    labels : {(camera number, frame): (H, W) uint8 mask, person id + 1}; other masks empty
+    labels : {(camera number, frame): (H, W) uint8 mask, person id + 1}; other masks empty;
+        the silhouettes are the same pixels (bit i: person i)
     """
     frames, people = positions.shape[:2]
     rng = np.random.default_rng(7)
@@ -30,11 +31,14 @@ def make_episode(folder, positions, labels, dist=(0.05, 0.0, 0.0, 0.0, 0.0), cam
     for n in cameras:
         write_calibration(folder / "calibration" / f"cam{n:02d}.yaml",
                           Camera(n, K, np.array(dist, float), np.eye(3), np.array([-1.0, -2.0, 4.0 + n]), W, H))
-        for sub in ("frames", "masks"):
+        for sub in ("frames", "masks", "silhouettes"):
             (folder / sub / f"cam{n:02d}").mkdir(parents=True)
         for f in range(frames):
             write_png(folder / "frames" / f"cam{n:02d}" / f"{f:06d}.png", rng.integers(0, 256, (H, W, 3), np.uint8))
-            write_png(folder / "masks" / f"cam{n:02d}" / f"{f:06d}.png", labels.get((n, f), np.zeros((H, W), np.uint8)))
+            mask = labels.get((n, f), np.zeros((H, W), np.uint8))
+            write_png(folder / "masks" / f"cam{n:02d}" / f"{f:06d}.png", mask)
+            bits = np.where(mask > 0, np.left_shift(1, mask.astype(np.uint16) - 1), 0).astype(np.uint16)
+            write_png(folder / "silhouettes" / f"cam{n:02d}" / f"{f:06d}.png", bits)   # no one hides anyone
     rows = [f"{f},{i},{float(x)!r},{float(y)!r},0.25,1.75" for f in range(frames) for i, (x, y) in enumerate(positions[f])]
     (folder / "people.csv").write_text("\n".join(["frame,person_id,x,y,radius,height", *rows]) + "\n")
     (folder / "meta.json").write_text(json.dumps({"episode": 0, "cameras": list(cameras), "frames": frames,
@@ -114,6 +118,8 @@ def test_undistort_remaps_the_frames_and_the_border_outside_the_lens_is_black_an
     assert inside.mean() > 0.6 and np.abs(got.astype(int) - want)[inside].max() <= 1
     (a0, a1) = annotations(out, 0)
     assert a1["views"] == [box(0, *NONE)]
+    whole = export_episode(ep, tmp_path / "whole", undistort=True, box="unoccluded")
+    assert annotations(whole, 0) == [a0, a1]              # the silhouettes' border holds no one either
     rr, cc = np.nonzero(mask)
     pts = cv2.undistortPoints(np.c_[cc, rr].astype(float).reshape(-1, 1, 2), K, np.array(dist), P=K).reshape(-1, 2)
     b = a0["views"][0]
