@@ -96,7 +96,7 @@ class AngleTerms:
         self._kernel = angle_mask
         bg = np.ascontiguousarray(background, dtype=np.float32)
         whole = bg.min() >= 0 and bg.max() <= 255 and np.array_equal(np.rint(bg), bg)
-        if not whole and bg.flags.writeable and np.shares_memory(bg, background):
+        if not whole and bg.flags.writeable and np.may_share_memory(bg, background):
             bg = bg.copy()      # the caller's own array: its writes must not change the model
         self._levels = bg.astype(np.uint8) if whole else bg       # what the compiled pass reads
         self._set_thresholds(threshold_deg, brightness_floor, dark_delta)
