@@ -125,8 +125,11 @@ class VideoWriter:
             self._log.close()
             raise
         try:
-            if code != 0 or self.frames == 0:
-                raise self._failed(proc, f"failed after {self.frames} frames")
+            if code != 0:
+                raise self._failed(proc, f"failed after {self.frames} frame{'s' * (self.frames != 1)}")
+            if self.frames == 0:                        # ffmpeg exits 0 on it; no reader takes the file
+                raise OSError(f"cannot write {self.path}: closed before any frame was written (a video holds "
+                              "at least one)")
         finally:
             self._log.close()
 

@@ -166,8 +166,8 @@ def test_a_writer_closed_without_a_frame_is_an_error(tmp_path):
     w = VideoWriter(tmp_path / "none.mkv", 64, 48, 7.5)
     with pytest.raises(OSError) as err:
         w.close()
-    assert str(err.value) == (f"cannot write {tmp_path / 'none.mkv'}: ffmpeg failed after 0 frames "
-                              "(exit status 0: no message)")
+    assert str(err.value) == (f"cannot write {tmp_path / 'none.mkv'}: closed before any frame was written "
+                              "(a video holds at least one)")
 
 
 def test_a_writer_s_error_counts_the_frames_it_took(tmp_path, monkeypatch):
