@@ -1,5 +1,6 @@
 """testbed.dataset.read_calibration: the arrays back, or one line naming the file and key."""
 
+import cv2
 import numpy as np
 import pytest
 
@@ -14,6 +15,8 @@ def test_round_trip(tmp_path):
     np.testing.assert_allclose(c["K"], cam.K)
     np.testing.assert_allclose(c["dist"], np.ravel(cam.dist))
     np.testing.assert_allclose(c["tvec"], np.ravel(cam.t))
+    R, _ = cv2.Rodrigues(c["rvec"])                     # the rotation back, not only its vector
+    np.testing.assert_allclose(R, cam.R, atol=1e-12)
     assert (c["width"], c["height"]) == (cam.width, cam.height)
 
 
