@@ -77,7 +77,8 @@ class VideoWriter:
 
     Any failure of ffmpeg (it died, could not write the file: a full disk, a file size
     limit) is an OSError naming the file, from :meth:`write` or :meth:`close`: the file is
-    complete when :meth:`close` returns.
+    complete when :meth:`close` returns. Frames less than 2 pixels wide or high are a
+    ValueError before ffmpeg starts (FFV1 cannot cut them into its slices).
     """
 
     def __init__(self, path: str | os.PathLike, width: int, height: int, fps: float):
@@ -85,6 +86,9 @@ class VideoWriter:
 
         self.path = Path(path)
         self.shape = (int(height), int(width), 3)
+        if min(self.shape[:2]) < 2:                     # FFV1's 4 slices need 2 x 2 pixels; ffmpeg fails at frame 1
+            raise ValueError(f"cannot write {self.path}: a lossless video needs frames at least 2 pixels wide and "
+                             f"high; got {int(width)} x {int(height)}")
         rate = str(Fraction(check_frame_rate("video", fps)).limit_denominator())
         # the command imageio_ffmpeg.write_frames ran (same bytes), with ffmpeg's exit status checked
         cmd = [ffmpeg_exe(), "-y", "-f", "rawvideo", "-vcodec", "rawvideo", "-s", f"{int(width)}x{int(height)}",

@@ -221,3 +221,14 @@ def test_a_frame_cut_short_is_never_yielded(tmp_path, monkeypatch, script, error
     with pytest.raises(error) as err:
         got.extend(read_video(path))
     assert got == [] and str(err.value).endswith(says.format(fake=fake))
+
+
+@pytest.mark.parametrize(("h", "w"), [(1, 1), (1, 8), (8, 1), (480, 1)])
+def test_a_frame_one_pixel_wide_or_high_is_refused_before_ffmpeg_starts(tmp_path, monkeypatch, h, w):
+    """FFV1 (4 slices) fails on such frames only once the first frame is written."""
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: pytest.fail("ffmpeg started"))
+    with pytest.raises(ValueError) as err:
+        VideoWriter(tmp_path / "thin.mkv", w, h, 7.5)
+    assert str(err.value) == (f"cannot write {tmp_path / 'thin.mkv'}: a lossless video needs frames at least "
+                              f"2 pixels wide and high; got {w} x {h}")
+    assert not (tmp_path / "thin.mkv").exists()
