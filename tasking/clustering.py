@@ -16,6 +16,8 @@ Axial angles wrap at pi, so k-means runs on the doubled-angle embedding
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 __all__ = ["axial_distance", "cluster_axes", "clustering_select", "pair_axes"]
@@ -51,7 +53,8 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     Parameters
     ----------
     axes : (s,) float, radians modulo pi, s >= 1
-    k : wanted number of clusters (fewer when there are fewer distinct angles)
+    k : wanted number of clusters (fewer when there are fewer distinct angles, or angles
+        ~1e-10 rad apart that k-means cannot tell apart: no cluster is returned empty)
     seed : int, k-means random_state
 
     Returns
@@ -61,6 +64,7 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     """
     # imported here: scikit-learn's import is ~1 s of every command's start
     from sklearn.cluster import KMeans
+    from sklearn.exceptions import ConvergenceWarning
 
     # k-means++ seeds by index: the same axes in another order (the estimates permuted)
     # could end in another local optimum; sorted (to 1e-12 rad) they are one input
@@ -68,10 +72,15 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     feats = np.c_[np.cos(2 * axes), np.sin(2 * axes)]
     distinct = np.unique(np.round(feats, 12), axis=0).shape[0]
     c = min(k, distinct)
-    with _one_thread():                         # the same sums whatever the machine's threads
+    with _one_thread(), warnings.catch_warnings():  # the same sums whatever the machine's threads
+        # axes ~1e-10 rad apart are distinct above but one point to k-means' distances: it
+        # warns and leaves clusters empty, dropped below
+        warnings.simplefilter("ignore", ConvergenceWarning)
         km = KMeans(n_clusters=c, n_init=10, random_state=seed).fit(feats)
-    centres = (np.arctan2(km.cluster_centers_[:, 1], km.cluster_centers_[:, 0]) / 2) % np.pi
+    # twice: a tiny negative angle % pi rounds to pi itself
+    centres = (np.arctan2(km.cluster_centers_[:, 1], km.cluster_centers_[:, 0]) / 2) % np.pi % np.pi
     sizes = np.bincount(km.labels_, minlength=c)
+    centres, sizes = centres[sizes > 0], sizes[sizes > 0]
     order = np.lexsort((centres, -sizes))
     centres, sizes = centres[order], sizes[order]
     if _closed_under_quarter_turn(feats):

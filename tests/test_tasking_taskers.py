@@ -777,3 +777,20 @@ def test_clustering_of_people_in_a_row_takes_each_of_the_two_axes_twice():
     assert sizes.tolist() == [3, 3]
     np.testing.assert_allclose(np.sort(axial_distance(centres, 0.0)), [0.0, np.pi / 2], atol=1e-9)
     assert clustering_select(yaw, row, 4, seed=0, camera_xy=xy).tolist() == [0, 4, 8, 12]
+
+
+@pytest.mark.parametrize("eps", [1e-10, 3e-10])
+def test_cluster_axes_of_axes_k_means_cannot_tell_apart_are_nonempty_and_below_pi(eps):
+    """Axes 1e-10 rad apart count as distinct to 1e-12 but not to k-means' distances: it
+    found 3 clusters of 5, returned the 2 empty ones (size 0) with a ConvergenceWarning,
+    and one centre at exactly pi (a tiny negative angle % pi)."""
+    import warnings
+
+    axes = np.array([0.0, eps, np.pi / 2, np.pi / 2 + eps, 0.3])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        centres, sizes = cluster_axes(axes, 5, seed=0)
+    assert sizes.min() >= 1 and sizes.sum() == axes.size
+    assert np.all((centres >= 0) & (centres < np.pi))
+    for c in centres:                                   # each centre on one of the three axes
+        assert axial_distance(c, np.array([0.0, np.pi / 2, 0.3])).min() < 1e-8
