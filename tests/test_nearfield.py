@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from shapely.geometry import Point, box
 
 from pipeline import Pipeline, load_params, sight_range
+from pipeline.nearfield import raw_pixels_per_radian
 from pipeline.rectify import level_cameras
 from scene import Camera
 from tasking import free_wedges_from_scanlines, visual_hull_of_scanlines
@@ -71,6 +72,105 @@ def test_blind_radius_grows_with_the_margin_and_is_zero_or_inf_at_the_extremes(l
         blind_radius(cams, 0.0)
     with pytest.raises(ValueError, match="margin"):
         blind_radius(cams, 1.75, -1.0)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(object_width=0.0), "object_width"),
+    (dict(object_width=-0.5), "object_width"),
+    (dict(object_width=0.5, columns=0.0), "columns"),
+    (dict(object_width=0.5, columns=-1.0), "columns"),
+    (dict(object_width=0.5, raw_columns=0.0), "raw_columns"),
+    (dict(object_width=0.5, raw_columns=-1.0), "raw_columns"),
+    (dict(margin=np.inf), "margin"),
+])
+def test_sight_range_refuses_a_width_or_margin_it_could_not_use(lab, kwargs, match):
+    """An object no wider than nothing, a run of no columns, or an endless margin has no
+    sight radius: refused by name, not turned into a radius of 0, inf or a negative one."""
+    with pytest.raises(ValueError, match=match):
+        sight_range(lab.cameras[:1], 1.75, **kwargs)
+
+
+def level_camera(dist=(0.0, 0.0, 0.0, 0.0, 0.0)) -> Camera:
+    """1.5 m high, level, 64 x 48 pixels, 50 degrees across, lens distortion ``dist``."""
+    return Camera.from_pose(1, [0.0, 0.0, 1.5], 0.0, 0.0, 64, 48, np.radians(50.0), list(dist))
+
+
+def test_width_limits_default_to_one_rectified_column_and_one_raw_pixel():
+    """A 10 cm object before a level undistorted camera: its raw image has fewest pixels per
+    radian at the two centre pixels, g = 1 / atan(1 / f) with f = 32 / tan(25 deg), and the
+    level camera f_v columns per radian; by height alone it is seen out to ~118 m, so the
+    width sets far = w f_v / columns or w g / raw_columns, whichever is smaller."""
+    cam = level_camera()
+    g = 1.0 / np.arctan(np.tan(np.radians(25.0)) / 32.0)
+    assert raw_pixels_per_radian(cam) == pytest.approx(g, rel=1e-12)
+    f_v = level_cameras([cam])[0][0, 0, 0]
+    assert f_v < g and sight_range([cam], 1.75)[1][0] > 100.0
+    far = lambda **kw: sight_range([cam], 1.75, object_width=0.1, **kw)[1][0]
+    assert far() == pytest.approx(0.1 * f_v, rel=1e-12)                 # columns = 1
+    assert far(columns=0.5) == pytest.approx(0.1 * g, rel=1e-12)         # raw_columns = 1
+    assert far(columns=0.5, raw_columns=2.0) == pytest.approx(0.05 * g, rel=1e-12)
+    assert far(columns=4.0, raw_columns=2.0) == pytest.approx(0.025 * f_v, rel=1e-12)
+    assert far(columns=0.5, pixels_per_radian=[g / 2]) == pytest.approx(0.05 * g, rel=1e-12)   # given, not recomputed
+
+
+@pytest.mark.parametrize("camera, widest", [
+    ("lab", (32, None)),                   # pitched down: the bottom row, near the centre
+    ("top right", (0, 63)),                # barrel lens, tangential terms: a corner pixel
+    ("bottom right", (32, 63)),
+])
+def test_raw_pixels_per_radian_is_the_widest_pixel_step_in_bearing(lab, camera, widest):
+    """Recomputed with OpenCV: pixel edges u = -0.5 .. W - 0.5 on 33 rows from the first pixel
+    row to the last, undistorted (cv2.undistortPoints), turned to the world (R^T) and taken
+    to bearings; one over the largest bearing step of a pixel, wherever in the image that
+    pixel lies (``widest``: its row and column)."""
+    p1 = {"top right": 0.01, "bottom right": -0.01}.get(camera)
+    cam = lab.cameras[0] if p1 is None else level_camera([-0.3, 0.0, p1, -0.01, 0.0])
+    us = np.arange(cam.width + 1) - 0.5
+    vs = np.linspace(0.0, cam.height - 1.0, 33)
+    uv = np.stack(np.meshgrid(us, vs), -1).reshape(-1, 1, 2)
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-15)
+    norm = cv2.undistortPoints(uv, cam.K, cam.dist, None, None, None, criteria).reshape(-1, 2)
+    rays = np.c_[norm, np.ones(len(norm))] @ cam.R                      # rows: R^T ray, world frame
+    bearings = np.unwrap(np.arctan2(rays[:, 1], rays[:, 0]).reshape(33, -1), axis=1)
+    steps = np.abs(np.diff(bearings, axis=1))                            # radians per pixel
+    assert raw_pixels_per_radian(cam) == pytest.approx(1.0 / steps.max(), rel=1e-9)
+    row, col = np.unravel_index(steps.argmax(), steps.shape)
+    assert row == widest[0] and widest[1] in (None, col)
+
+
+def test_a_camera_that_never_sees_the_object_has_no_range(lab):
+    """near = far = inf where the object never shows: a lab camera and an object so thin
+    that it is under one column wide (far = w min(f_v, g)) before it leaves the blind radius,
+    and cameras on or below the floor. 1% wider, the range is [near, w min(f_v, g)]."""
+    cams = lab.cameras[:1]
+    near = sight_range(cams, 1.75)[0][0]
+    per_radian = min(level_cameras(cams)[0][0, 0, 0], raw_pixels_per_radian(cams[0]))
+    width = near / per_radian                       # one column wide at the blind radius
+    got = sight_range(cams, 1.75, object_width=1.01 * width)
+    assert got[0][0] == near and got[1][0] == pytest.approx(1.01 * near, rel=1e-12)
+    assert np.concatenate(sight_range(cams, 1.75, object_width=0.99 * width)).tolist() == [np.inf, np.inf]
+    for z in (0.0, -0.2):
+        low = Camera.from_pose(1, [1.0, 2.0, z], 0.0, np.radians(10.0), 640, 480, np.radians(49.0), np.zeros(5))
+        assert low.center_world[2] == z                                  # exactly on the floor, or below
+        assert np.concatenate(sight_range([low], 0.5)).tolist() == [np.inf, np.inf]
+
+
+@pytest.mark.parametrize("lower", [True, False])
+def test_image_edge_follows_the_raw_image_edge_across_every_column(lab, lower):
+    """The lower (upper) edge of a distorted lab camera, level frame, against the edge sampled
+    at 20001 points from u = -0.5 to W - 0.5: the level camera's columns span exactly the
+    upper edge's x, so a sampling that starts inside the image misses its ends."""
+    from pipeline.nearfield import image_edge
+    from pipeline.rectify import level_points
+
+    cam = lab.cameras[0]
+    Ks, _, width = level_cameras([cam])
+    us = np.linspace(-0.5, cam.width - 0.5, 20001)
+    x, y = level_points(cam, np.c_[us, np.full_like(us, cam.height - 0.5 if lower else -0.5)])
+    columns = (np.arange(width) - Ks[0, 0, 2]) / Ks[0, 0, 0]
+    assert x.min() <= columns[0] and columns[-1] <= x.max()
+    want = np.interp(columns, x[np.argsort(x)], y[np.argsort(x)])
+    np.testing.assert_allclose(image_edge(cam, Ks[0], width, lower), want, rtol=0, atol=1e-5)
 
 
 def test_the_pipelines_margin_is_its_threshold_over_alpha_plus_the_opening(lab):
@@ -211,6 +311,22 @@ def test_a_low_camera_pitched_up_sees_people_only_up_to_a_distance():
     near, far = sight_range([camera], 1.75, margin=0.0)
     assert near[0] == 0.0 and 1.0 < far[0] < 3.0
     assert far[0] == pytest.approx(projected_sight_distance(camera, 1.75), abs=4e-3)
+
+
+def test_a_camera_with_its_upper_edge_on_the_horizon_sees_a_foot_out_to_h_f_over_margin():
+    """A pinhole 1 m high pitched down by its upper half field of view: its upper edge lies
+    on the horizon (y = 0 in every column), so a taller object's foot shows ``margin`` rows
+    below it out to d = H s / m (m = margin / f_v, s = sqrt(1 + x^2), least at the centre
+    column); its top, above the image, limits nothing, and there is no blind radius."""
+    level = pinhole(1.0, 0.0)
+    pitch = np.degrees(np.arctan((level.K[1, 2] + 0.5) / level.K[1, 1]))
+    camera = pinhole(1.0, pitch)
+    Ks, _, width = level_cameras([camera])
+    s = np.sqrt(1.0 + ((np.arange(width) - Ks[0, 0, 2]) / Ks[0, 0, 0]) ** 2)
+    for margin in (1.0, 10.0):
+        near, far = sight_range([camera], 1.75, margin)
+        assert near[0] == 0.0
+        assert far[0] == pytest.approx(1.0 * s.min() * Ks[0, 1, 1] / margin, rel=1e-9)
 
 
 def test_the_documented_sight_radii_of_the_steep_lab():
