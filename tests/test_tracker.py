@@ -1,5 +1,7 @@
 """The hull-centre tracker and its ground-truth metrics."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -83,6 +85,23 @@ def test_metrics_gate_is_a_distance_not_a_squared_distance():
     # 0.6 m away with max_distance 0.5 m: no match (0.36 m^2 is below 0.5, above 0.25)
     m = tracking_metrics([[0]], [[[0.0, 0.0]]], [[7]], [[[0.6, 0.0]]], 0.5)
     assert m["matches"] == 0 and m["mota"] == -1.0 and np.isnan(m["mse"])
+
+
+def test_a_track_exactly_max_distance_away_still_matches():
+    """Only a track farther than max_distance cannot match: one exactly 0.5 m away (0.25 m^2,
+    exact in binary) matches, with mse 0.25 m^2 and motp 0.5 m."""
+    m = tracking_metrics([[0]], [[[1.0, 2.0]]], [[7]], [[[1.5, 2.0]]], 0.5)
+    assert m["matches"] == 1 and m["misses"] == 0 and m["false_positives"] == 0
+    assert (m["mse"], m["motp"], m["mota"]) == (0.25, 0.5, 1.0)
+
+
+def test_no_match_gives_nan_errors_without_a_warning():
+    """With no matched object-frame, mse and motp are NaN, not the mean of an empty array
+    (NumPy's "Mean of empty slice" RuntimeWarning)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        m = tracking_metrics([[0]], [[[0.0, 0.0]]], [[7]], [[[0.6, 0.0]]], 0.5)
+    assert m["matches"] == 0 and np.isnan(m["mse"]) and np.isnan(m["motp"])
 
 
 def test_metrics_with_a_miss_and_an_identity_switch():
