@@ -147,3 +147,13 @@ def test_distortion_map_sends_every_pixel_to_the_canvas_pixel_of_its_ray(lens):
     # cv2.undistortPoints, whose iterations alone stopped up to 0.2 px short in these lenses),
     # the float32 map's rounding is the rest (at most 4.5e-5 px in 3600 such lenses)
     np.testing.assert_allclose(back, np.column_stack([u.ravel(), v.ravel()]), atol=1e-4)
+
+
+def test_the_default_clipping_planes_are_5_cm_and_50_m():
+    """Depth 0.05 m in front of the lens maps to NDC z = -1 (the near plane), 50 m to +1 (far)."""
+    K = np.array([[500.0, 0, 319.5], [0, 500.0, 239.5], [0, 0, 1]])
+    points = np.array([[0.0, 0.0, 0.05, 1.0], [0.0, 0.0, 50.0, 1.0], [0.01, -0.02, 1.0, 1.0]])  # OpenCV camera
+    clip = (projection_matrix(K, 640, 480) @ view_matrix(np.eye(3), np.zeros(3)) @ points.T).T
+    ndc_z = clip[:, 2] / clip[:, 3]
+    np.testing.assert_allclose(ndc_z[:2], [-1.0, 1.0], atol=1e-12)
+    assert -1.0 < ndc_z[2] < 1.0
