@@ -91,6 +91,27 @@ WALL_COLOURS = ((196, 190, 172), (178, 186, 192), (200, 194, 184), (184, 192, 17
 BASEBOARD = (0.10, (92, 84, 76))  # height (m), colour
 
 
+def _piece_triangles(piece) -> np.ndarray:
+    """A tile clipped to the room, as (3t, 2) float triangle corners, metres.
+
+    A convex polygon is fanned from its first corner (every tile of a rectangle or circle
+    room); the parts of any other piece (a concave room's corner makes one, a slot can
+    cut a tile in two) go through a constrained Delaunay triangulation, which keeps to
+    their outline.
+    """
+    out = []
+    for part in shapely.get_parts(piece):
+        if not isinstance(part, shapely.Polygon) or part.area < 1e-12:
+            continue                            # a point or segment the clip touched
+        if part.interiors or part.convex_hull.area - part.area > 1e-12 * max(part.area, 1.0):
+            tris = shapely.get_parts(shapely.constrained_delaunay_triangles(part))
+            out.extend(np.asarray(t.exterior.coords)[:3] for t in tris)
+            continue
+        ring = np.asarray(part.exterior.coords)[:-1]
+        out.append(np.stack([np.repeat(ring[:1], len(ring) - 2, 0), ring[1:-1], ring[2:]], 1).reshape(-1, 2))
+    return np.concatenate(out) if out else np.empty((0, 2))
+
+
 def room_mesh(room: Room, lighting: Lighting = Lighting(), tile: float = FOOT,
               cell: float = 1.0) -> Mesh:
     """Floor (tiles with a subtle checker and per-tile variation), walls, ceiling.
@@ -102,7 +123,7 @@ def room_mesh(room: Room, lighting: Lighting = Lighting(), tile: float = FOOT,
     rng = np.random.default_rng(0)  # fixed texture: part of the room, not of a run
     parts = []
 
-    # floor: tiles clipped to the room, each a convex polygon fanned into triangles
+    # floor: tiles clipped to the room, each piece cut into triangles
     x0, y0, x1, y1 = room.polygon.bounds
     tris, cols = [], []
     for i, x in enumerate(np.arange(x0, x1, tile)):
@@ -110,9 +131,8 @@ def room_mesh(room: Room, lighting: Lighting = Lighting(), tile: float = FOOT,
             piece = shapely.box(x, y, x + tile, y + tile).intersection(room.polygon)
             if piece.is_empty or piece.area < 1e-9:
                 continue
-            ring = np.asarray(piece.exterior.coords)[:-1]
             tint = (1.0 + 0.05 * ((i + j) % 2)) * (1.0 + 0.025 * rng.standard_normal())
-            fan = np.stack([np.repeat(ring[:1], len(ring) - 2, 0), ring[1:-1], ring[2:]], 1).reshape(-1, 2)
+            fan = _piece_triangles(piece)
             tris.append(np.column_stack([fan, np.zeros(len(fan))]))
             cols.append(np.tile(np.asarray(FLOOR_COLOUR) * tint, (len(fan), 1)))
     pts = np.concatenate(tris)
@@ -147,9 +167,7 @@ def room_mesh(room: Room, lighting: Lighting = Lighting(), tile: float = FOOT,
             piece = shapely.box(x, y, x + cell, y + cell).intersection(room.polygon)
             if piece.is_empty or piece.area < 1e-9:
                 continue
-            ring = np.asarray(piece.exterior.coords)[:-1]
-            fan = np.stack([np.repeat(ring[:1], len(ring) - 2, 0), ring[1:-1], ring[2:]], 1).reshape(-1, 2)
-            ceiling.append(fan)
+            ceiling.append(_piece_triangles(piece))
     fan = np.concatenate(ceiling)
     pts = np.column_stack([fan, np.full(len(fan), room.height)])
     normals = np.tile([0.0, 0.0, -1.0], (len(pts), 1))

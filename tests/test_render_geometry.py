@@ -54,8 +54,17 @@ def test_lambert_and_lamp_by_hand():
                                [0.5 * 4 / 5, 0.5 * np.sqrt(0.5) * 4 / 9, 0.0])
 
 
-@pytest.mark.parametrize("room", [Room.rectangle(4.0, 3.0, 2.5), Room.circle(2.0, 2.4, n_vertices=60)],
-                         ids=["rectangle", "circle"])
+#: An L: its inner corner (1.5, 1.5) lies inside a floor tile and a ceiling cell, which
+#: it makes concave (fanned from a corner, their triangles crossed the notch).
+L_ROOM = Room(np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 1.5], [1.5, 1.5], [1.5, 3.0], [0.0, 3.0]]), 2.5)
+#: A U whose 0.1 m slot (x 1.0 .. 1.1, y from 1 m up) cuts floor tiles and ceiling cells
+#: in two (each piece a polygon of its own: a MultiPolygon has no exterior).
+U_ROOM = Room(np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 3.0], [1.1, 3.0], [1.1, 1.0], [1.0, 1.0], [1.0, 3.0],
+                        [0.0, 3.0]]), 2.5)
+
+
+@pytest.mark.parametrize("room", [Room.rectangle(4.0, 3.0, 2.5), Room.circle(2.0, 2.4, n_vertices=60), L_ROOM,
+                                  U_ROOM], ids=["rectangle", "circle", "L", "U"])
 def test_room_mesh_is_the_floor_the_walls_and_the_ceiling(room):
     mesh = room_mesh(room)
     assert mesh.positions.dtype == mesh.colours.dtype == mesh.person.dtype == np.float32
@@ -75,6 +84,8 @@ def test_room_mesh_is_the_floor_the_walls_and_the_ceiling(room):
     on_edge = shapely.contains_xy(room.polygon.exterior.buffer(1e-5), tri[walls, :, 0].ravel(),
                                   tri[walls, :, 1].ravel())
     assert inside.all() and on_edge.all()
+    centres = tri[floor | ceiling].mean(axis=1)                         # no triangle spills out of the room
+    assert shapely.contains_xy(room.polygon.buffer(1e-9), centres[:, 0], centres[:, 1]).all()
     # the floor is tinted by tile, grey: each floor vertex's colour is FLOOR_COLOUR's hue
     c = mesh.colours.reshape(-1, 3, 3)[floor].reshape(-1, 3).astype(float)
     np.testing.assert_allclose(c / c[:, :1], np.tile(np.array(FLOOR_COLOUR) / FLOOR_COLOUR[0], (len(c), 1)),
