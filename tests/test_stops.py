@@ -79,3 +79,100 @@ def test_a_script_stopped_in_numbas_dispatcher_ends_in_one_line(capsys):
 
     with pytest.raises(SystemError, match="a real bug"):
         stops.run_main(broken, "scanlines.py")
+
+
+class _Raising:
+    def __init__(self, exc):
+        self.exc = exc
+
+    def __del__(self):                          # Python hands this to sys.unraisablehook
+        raise self.exc
+
+
+def test_a_signal_in_ordinary_code_is_raised_at_once():
+    import time
+
+    with stops.handled(), pytest.raises(stops.Terminated):
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)                           # not reached: the handler raises where the signal lands
+
+
+def test_other_finalizer_errors_still_reach_the_hook():
+    """Only a recorded signal's exception is kept quiet: another error in a finalizer, or a
+    KeyboardInterrupt raised by code rather than by a signal, is passed to the hook as before."""
+    import sys
+
+    shown = []
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    hook, sys.unraisablehook = sys.unraisablehook, lambda u: shown.append(type(u.exc_value))
+    try:
+        with stops.handled():
+            _Raising(RuntimeError("in a finalizer"))
+            _Raising(KeyboardInterrupt())       # no signal came: not ours to hide
+            assert shown == [RuntimeError, KeyboardInterrupt]
+            _Dropped(signal.SIGINT)             # a signal swallowed: its exception is quiet ...
+            _Raising(RuntimeError("after the signal"))    # ... but not everything after it
+            assert shown == [RuntimeError, KeyboardInterrupt, RuntimeError]
+            with pytest.raises(KeyboardInterrupt):
+                stops.check()
+    finally:
+        sys.unraisablehook = hook
+        signal.signal(signal.SIGINT, before)
+
+
+def test_the_handlers_before_are_restored():
+    def mine(signum, frame):
+        pass
+
+    before = signal.signal(signal.SIGTERM, mine), signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with stops.handled():
+            assert signal.getsignal(signal.SIGTERM) is not mine
+            assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler
+        assert signal.getsignal(signal.SIGTERM) is mine
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        signal.signal(signal.SIGINT, signal.SIG_IGN)              # as under nohup: Ctrl-C stays ignored
+        with stops.handled():
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGTERM, before[0])
+        signal.signal(signal.SIGINT, before[1])
+
+
+def test_in_another_thread_handled_does_nothing():
+    import threading
+
+    seen = []
+
+    def work():
+        before = signal.getsignal(signal.SIGTERM)
+        with stops.handled():
+            seen.append(signal.getsignal(signal.SIGTERM) is before)
+
+    t = threading.Thread(target=work)
+    t.start()
+    t.join()
+    assert seen == [True]
+
+
+def test_interruption_follows_causes_then_contexts_and_ends_on_a_cycle():
+    stop = KeyboardInterrupt()
+    caused = SystemError("numba")
+    caused.__cause__ = stop                     # raise ... from stop, outside any except block
+    assert stops.interruption(caused) is stop
+    during = SystemError("numba")
+    during.__context__ = stop                   # raised while handling stop, no "from"
+    assert stops.interruption(during) is stop
+    both = SystemError("numba")
+    both.__cause__, both.__context__ = stop, RuntimeError("handled first")
+    assert stops.interruption(both) is stop     # the cause first, as Python shows it
+    assert stops.interruption(RuntimeError("no signal")) is None
+    a, b = RuntimeError("a"), RuntimeError("b")
+    a.__cause__, b.__context__ = b, a           # a cycle (raise a from b while handling a)
+    assert stops.interruption(a) is None
+
+
+def test_a_scripts_exit_status_is_what_its_main_returns():
+    assert stops.run_main(lambda: None, "x.py") == 0
+    assert stops.run_main(lambda: 3, "x.py") == 3
