@@ -89,3 +89,82 @@ def test_export_and_check_output_file_leave_no_folders(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="intr_C1.xml"):
         export_episode(episode, tmp_path / "deep" / "er" / "wt")
     assert seen == [True] and os.listdir(tmp_path) == ["ep"]
+
+
+def test_an_output_in_a_file_taken_for_a_folder_is_one_line(tmp_path):
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(ValueError, match=r"^--out: cannot write to .*afile \(not a folder\)$"):
+        check_output_file("--out", tmp_path / "afile" / "x.npz")
+    assert check_output_file("--out", tmp_path / "x.npz") == tmp_path / "x.npz"      # the folder exists
+    assert check_output_file("--plot", tmp_path / "X.PNG", ".png") == tmp_path / "X.PNG"
+    assert os.listdir(tmp_path) == ["afile"]
+
+
+def _dataset(root: Path, manifest: str) -> Path:
+    (root / "episode_0000").mkdir(parents=True)
+    (root / "manifest.json").write_text(manifest)
+    return root
+
+
+def test_the_episode_of_a_path_is_a_folder_named_episode_beside_a_manifest(tmp_path):
+    from testbed.output import episode_of
+
+    ds = _dataset(tmp_path / "ds", "{}")
+    episode = ds / "episode_0000"
+    assert episode_of(episode / "frames" / "x.png") == episode
+    assert episode_of(episode) is None and episode_of(episode, itself=True) == episode
+    assert episode_of(ds / "episode_0001.png") is None                  # beside the episodes, not in one
+    (ds / "other").mkdir()
+    assert episode_of(ds / "other" / "x.png") is None                   # beside the manifest, not an episode
+    (tmp_path / "episode_0007").mkdir()
+    assert episode_of(tmp_path / "episode_0007" / "x.png") is None      # no manifest beside it
+
+
+def test_a_damaged_manifest_beside_episodes_is_a_dataset_and_another_manifest_is_not(tmp_path):
+    from testbed.output import check_outside_dataset
+
+    ds = _dataset(tmp_path / "ds", "{not json")
+    with pytest.raises(ValueError, match=r"^--out: .*x.png is in the dataset .*ds, beside its manifest.json"):
+        check_outside_dataset("--out", ds / "x.png")
+    (tmp_path / "web").mkdir()
+    (tmp_path / "web" / "manifest.json").write_text("{not json")
+    check_outside_dataset("--out", tmp_path / "web" / "x.png")            # no episodes: not a dataset
+
+
+def test_figures_are_written_whole_at_their_dpi_and_closed(tmp_path):
+    """A 2 x 1 inch figure at the default 80 dpi is 160 x 80 pixels."""
+    import cv2
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from testbed.output import figure_png, save_figure
+
+    fig = plt.figure(figsize=(2, 1))
+    png = figure_png(fig)
+    assert not plt.fignum_exists(fig.number)
+    assert cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_UNCHANGED).shape[:2] == (80, 160)
+    fig = plt.figure(figsize=(2, 1))
+    save_figure(fig, tmp_path / "new" / "f.png")
+    assert not plt.fignum_exists(fig.number)
+    assert cv2.imread(str(tmp_path / "new" / "f.png")).shape[:2] == (80, 160)
+    assert os.listdir(tmp_path / "new") == ["f.png"]
+
+
+def test_counts_are_ticked_in_whole_numbers_also_for_one_value():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from testbed.output import count_axis
+
+    fig, ax = plt.subplots()
+    ax.plot([4], [0.5], "o")
+    count_axis(ax.xaxis)
+    fig.canvas.draw()
+    lo, hi = ax.get_xlim()
+    ticks = [t for t in ax.get_xticks() if lo <= t <= hi]
+    plt.close(fig)
+    assert ticks and all(t == round(t) for t in ticks)
