@@ -164,6 +164,40 @@ def _set(config, path, value):
     (("people", "colours"), [[0.5, 0, 0]] * 3, r"people.colours: expected at least 3 RGB triples of integers"),
     (("people", "count"), 200, r"people.count: 200 people of radius 0.25 m do not fit in the room; expected at most 49"),
     (("name",), None, r"name: expected a non-empty string, got None"),
+    (("name",), "", r"name: expected a non-empty string, got ''"),
+    (("name",), 5, r"name: expected a non-empty string, got 5"),
+    (("room", "shape"), "oval", r"room.shape: unknown value 'oval'; expected one of rectangle, circle"),
+    (("room",), {"width": 6.0, "depth": 5.0, "height": 2.7}, r"room: missing key 'shape'"),
+    (("room",), {"shape": "circle", "radius": 3.0, "width": 6.0}, r"room: unknown key 'width'; expected keys among shape, radius, height$"),
+    (("room", "radius"), 1.0, r"room: unknown key 'radius'; expected keys among shape, width, depth, height$"),
+    (("cameras", "lens"), 1, r"cameras: unknown key 'lens'; expected keys among intrinsics, poses, ring$"),
+    (("cameras", "intrinsics", "resolution"), "64", r"resolution: expected \[width, height\], got '64'"),
+    (("cameras", "intrinsics", "resolution"), [640, 480, 3], r"resolution: expected \[width, height\], got \[640, 480, 3\]"),
+    (("cameras", "intrinsics", "resolution"), [640, 1], r"resolution: expected an integer >= 2, got 1"),
+    (("cameras", "poses"), [], r"cameras.poses: expected a non-empty list of camera poses"),
+    (("cameras", "poses"), {"number": 1}, r"cameras.poses: expected a non-empty list of camera poses"),
+    (("cameras", "poses", 0, "roll_deg"), 0, r"cameras.poses\[0\]: unknown key 'roll_deg'"),
+    (("cameras", "poses", 0, "number"), 0, r"cameras.poses\[0\].number: expected an integer >= 1, got 0"),
+    (("cameras", "poses", 1, "number"), 1, r"cameras.poses: expected camera numbers 1..16 once each, got \[1, 1, 3, 4, "),
+    (("cameras", "poses", 0, "position"), [0.781, 0.05, 0.0], r"poses\[0\].position: camera 1 at .* is outside the room"),
+    (("cameras", "poses", 0, "position"), [0.781, 0.05, 2.7], r"poses\[0\].position: camera 1 at .* is outside the room"),
+    (("cameras", "poses", 0, "pitch_deg"), 90, r"pitch_deg: expected a pitch in \(-90, 90\) degrees \(down is positive\), got 90"),
+    (("cameras", "poses", 0, "pitch_deg"), -90, r"pitch_deg: expected a pitch in \(-90, 90\) degrees .*, got -90"),
+    (("people", "colour"), "red", r"people: unknown key 'colour'"),
+    (("people", "speed"), 0, r"people.speed: expected a finite number > 0 and at most 100 m/s, got 0"),
+    (("people", "radius"), float("inf"), r"people.radius: expected a finite number >= 0.001 m, got inf"),
+    (("people", "count"), True, r"people.count: expected an integer, got True"),
+    (("people", "colours"), [[-1, 0, 0]] * 3, r"people.colours: expected at least 3 RGB triples of integers in 0..255"),
+    (("people", "colours"), [[0, 256, 0]] * 3, r"people.colours: expected at least 3 RGB triples of integers in 0..255"),
+    (("people", "colours"), [[0, 0, 0]] * 2, r"people.colours: expected at least 3 RGB triples of integers in 0..255"),
+    (("people", "positions"), [[2, 2], [2.4, 2.0], [4, 4]], r"people.positions\[1\]: person overlaps person 0"),
+    (("render", "fps"), 3, r"render: unknown key 'fps'"),
+    (("uniform_sets",), [1, 2], r"uniform_sets: expected a mapping k -> list of camera numbers"),
+    (("uniform_sets",), {0: []}, r"uniform_sets key: expected an integer >= 1, got 0"),
+    (("uniform_sets",), {2: [1, 2, 2]}, r"uniform_sets\[2\]: expected 2 distinct camera numbers in 1..16"),
+    (("uniform_sets",), {2: [1, 1]}, r"uniform_sets\[2\]: expected 2 distinct camera numbers in 1..16"),
+    (("uniform_sets",), {2: [1, 17]}, r"uniform_sets\[2\]: expected 2 distinct camera numbers in 1..16"),
+    (("uniform_sets",), {2: [0, 1]}, r"uniform_sets\[2\]: expected 2 distinct camera numbers in 1..16"),
 ])
 def test_bad_scene_fields(lab_config, path, value, match):
     with pytest.raises(ValueError, match=match):
@@ -297,6 +331,14 @@ def test_yaml_syntax_error_says_what_and_where():
         Scene.from_text(LAB.replace("[640, 480]", "[640, 480"), "s.yaml")
 
 
+def test_a_control_character_is_one_line_naming_it():
+    """The reader's errors have no ``problem``: their first line says what is wrong (the
+    next one, 'in "<unicode string>", position N', names no file)."""
+    with pytest.raises(ValueError) as err:
+        Scene.from_text(LAB.replace("name: lab", "name: l\x07ab"), "s.yaml")
+    assert str(err.value) == "s.yaml: not valid YAML (unacceptable character #x0007: control characters are not allowed)"
+
+
 def test_non_utf8_scene_file_is_one_line_naming_the_file(tmp_path):
     path = tmp_path / "s.yaml"
     path.write_bytes(LAB.replace("name: lab", "name: caf\xe9").encode("latin-1"))
@@ -392,3 +434,137 @@ def test_render_settings_and_yaw_beyond_any_meaning_are_refused(old, new, match)
     assert old in LAB
     with pytest.raises(ValueError, match=match):
         Scene.from_text(LAB.replace(old, new, 1), "s.yaml")
+
+
+# ---- what a scene file may leave out, and the edges of what it may say
+SMALL = """\
+room: {shape: rectangle, width: 4.0, depth: 3.0, height: 2.5}
+cameras:
+  intrinsics: {resolution: [64, 48], hfov_deg: 60, distortion: [0, 0, 0, 0, 0]}
+  poses:
+    - {number: 1, position: [0.1, 0.1, 2.0], yaw_deg: 45, pitch_deg: 10}
+people: {count: 2, radius: 0.25}
+"""
+
+
+@pytest.mark.parametrize("extra", ["", "render:\nuniform_sets:\n"])
+def test_a_scene_without_its_optional_keys_has_the_documented_defaults(extra):
+    """docs/conventions.md: name from the file, 7.5 Hz, people 1.75 m tall walking 1 m/s in
+    the palette's colours, the principal point at the image's centre, egl with 2 grey levels
+    of noise and 2 % gain jitter; an empty ``render`` or ``uniform_sets`` is left out."""
+    from scene import RenderSettings
+    from scene.config import default_colours
+
+    scene = Scene.from_text(SMALL + extra, "rooms/small.yaml")
+    assert scene.name == "small" and scene.frame_rate == 7.5 and scene.uniform_sets == {}
+    assert scene.render == RenderSettings() == RenderSettings("egl", 2.0, 0.02)
+    people = scene.people
+    assert (people.count, people.height, people.speed, people.positions) == (2, 1.75, 1.0, None)
+    np.testing.assert_array_equal(people.colours, default_colours(2))
+    np.testing.assert_array_equal(people.colours, [[200, 30, 30], [30, 70, 200]])
+    assert (scene.cameras[0].K[0, 2], scene.cameras[0].K[1, 2]) == (31.5, 23.5)      # ((64 - 1) / 2, (48 - 1) / 2)
+    bare = Scene("bare", scene.room, scene.cameras, scene.people)
+    assert bare.frame_rate == 7.5 and bare.render == RenderSettings() and bare.uniform_sets == {}
+
+
+def test_the_time_between_frames_is_one_over_the_frame_rate():
+    assert Scene.from_text(SMALL + "frame_rate: 4\n").dt == 0.25
+
+
+def test_a_scene_and_its_parts_are_frozen():
+    scene = Scene.from_text(SMALL)
+    for obj, field in ((scene, "frame_rate"), (scene.people, "count"), (scene.render, "backend")):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(obj, field, 1)
+
+
+def test_the_principal_point_given_is_the_cameras():
+    cam = load_scene("lab").cameras[4]
+    assert (cam.K[0, 2], cam.K[1, 2]) == (322.4, 236.8)
+
+
+def test_a_built_in_scene_is_named_by_one_of_its_names():
+    with pytest.raises(ValueError, match=r"^scene: unknown value 'hall'; expected one of lab, circle$"):
+        scene_path("hall")
+
+
+@pytest.mark.parametrize("old, new", [
+    ("position: [0.1, 0.1, 2.0]", "position: [0.1, 0.1, 0.01]"),       # just above the floor
+    ("position: [0.1, 0.1, 2.0]", "position: [0.0, 0.4, 2.0]"),     # on a wall
+    ("pitch_deg: 10", "pitch_deg: 89.5"),
+    ("pitch_deg: 10", "pitch_deg: -89.5"),
+    ("resolution: [64, 48]", "resolution: [2, 2]"),
+    ("resolution: [64, 48]", "resolution: [16380, 2]"),
+    ("radius: 0.25}", "radius: 0.25, height: 2.5}"),                     # as tall as the ceiling
+    ("radius: 0.25}", "radius: 0.25, colours: [[0, 0, 0], [255, 255, 255]]}"),
+    ("radius: 0.25}", "radius: 0.25, positions: [[1.0, 1.0], [1.5, 1.0]]}"),   # touching, not overlapping
+    ("radius: 0.25}", "radius: 0.25}\nuniform_sets: {1: [1]}"),
+])
+def test_values_at_the_edges_of_their_ranges_load(old, new):
+    assert old in SMALL
+    Scene.from_text(SMALL.replace(old, new))
+
+
+def test_two_people_overlapping_are_refused():
+    text = SMALL.replace("radius: 0.25}", "radius: 0.25, positions: [[1.0, 1.0], [1.4, 1.0]]}")
+    with pytest.raises(ValueError, match=r"people.positions\[1\]: person overlaps person 0"):
+        Scene.from_text(text)
+
+
+def test_more_colours_than_people_keep_the_first():
+    text = SMALL.replace("radius: 0.25}", "radius: 0.25, colours: [[1, 2, 3], [4, 5, 6], [7, 8, 9]]}")
+    np.testing.assert_array_equal(Scene.from_text(text).people.colours, [[1, 2, 3], [4, 5, 6]])
+
+
+@pytest.mark.parametrize("positions, match", [
+    ("[[1.0, 1.0]]", r"people.positions: expected shape \(0, 2\), got \(1, 2\)"),
+    ("{}", r"people.positions: expected numbers of shape \(0, 2\)"),
+])
+def test_no_people_and_positions_for_someone_is_refused(positions, match):
+    text = SMALL.replace("{count: 2, radius: 0.25}", f"{{count: 0, radius: 0.25, positions: {positions}}}")
+    with pytest.raises(ValueError, match=match):
+        Scene.from_text(text)
+
+
+def test_a_crowd_covering_exactly_a_quarter_of_the_floor_may_be_dropped():
+    """A person of radius 1 m covers pi m2, a quarter of a pi x 4 m floor: at most a quarter may be covered."""
+    text = SMALL.replace("width: 4.0, depth: 3.0", f"width: {np.pi!r}, depth: 4.0")
+    scene = Scene.from_text(text.replace("{count: 2, radius: 0.25}", "{count: 1, radius: 1.0}"))
+    assert scene.people.count == 1
+    with pytest.raises(ValueError, match=r"people.count: 2 people of radius 1 m do not fit in the room; expected at most 1"):
+        Scene.from_text(text.replace("{count: 2, radius: 0.25}", "{count: 2, radius: 1.0}"))
+
+
+def test_cameras_without_poses_or_a_ring_elsewhere_are_refused(lab_config):
+    with pytest.raises(ValueError, match=r"^cameras: missing key 'poses'$"):
+        Scene.from_config(_set(lab_config, ("cameras",), {"intrinsics": lab_config["cameras"]["intrinsics"]}))
+    with pytest.raises(ValueError, match=r"^cameras.ring: a ring of cameras needs a circular room$"):
+        Scene.from_config(_set(lab_config, ("cameras",), {"ring": {"count": 4, "fov_deg": 90}}))
+
+
+@pytest.mark.parametrize("old, new, match", [
+    ("count: 16, fov_deg: 180", "count: 16", r"^cameras.ring: missing key 'fov_deg'$"),
+    ("count: 16", "count: 0", r"^cameras.ring.count: expected an integer >= 1, got 0$"),
+    ("fov_deg: 180", "fov_deg: 400", r"^cameras.ring.fov_deg: expected a field of view in \[1e-06, 180\] degrees, got 400$"),
+    ("ring: {count: 16", "ring: {count: 16, extra: 1", r"^cameras.ring: unknown key 'extra'"),
+    ("ring:", "lens: 1\n  ring:", r"^cameras: unknown key 'lens'; expected keys among intrinsics, poses, ring$"),
+])
+def test_bad_rings_are_one_line(old, new, match):
+    assert old in CIRCLE
+    with pytest.raises(ValueError, match=match):
+        Scene.from_text(CIRCLE.replace(old, new))
+
+
+def test_a_ring_is_the_studies_cameras_numbered_from_angle_zero():
+    """The paper's ring (testbed.studies.core.circle_cameras): camera 1 at angle 0, the rest
+    evenly counter-clockwise on the wall, each facing the centre."""
+    from testbed.studies.core import circle_cameras
+
+    for count, fov in ((16, 180), (1, 0.5), (5, 90)):
+        scene = Scene.from_text(CIRCLE.replace("count: 16, fov_deg: 180", f"count: {count}, fov_deg: {fov}"))
+        xy, yaw, fovs = scene.floor_poses()
+        want_xy, want_yaw = circle_cameras(count)
+        assert [c.number for c in scene.cameras] == list(range(1, count + 1))
+        np.testing.assert_allclose(xy, want_xy, atol=1e-12)
+        np.testing.assert_allclose(np.exp(1j * yaw), np.exp(1j * want_yaw), atol=1e-12)
+        np.testing.assert_allclose(fovs, np.radians(fov), rtol=1e-12)
