@@ -182,3 +182,17 @@ def test_no_two_legend_entries_look_alike():
     solid = cv2.erode((strip == CAMERA_OFF).all(axis=2).astype(np.uint8), np.ones((3, 3), np.uint8))
     grey = np.flatnonzero(solid.any(axis=0))
     assert grey.size and grey.min() > cols.max()
+
+
+def test_a_room_centred_on_the_origin_is_drawn_within_the_margins():
+    """The circle room's corner of bounds is (-1, -1) m, not the origin (the lab's): the room
+    fills the width less the margins and the height likewise, its centre at the canvas's
+    centre, y up (the top of the room is the top of the canvas)."""
+    scene = load_scene("circle")
+    view = TopView(scene, width=640, margin=30)
+    assert view.scale == pytest.approx(580 / 2.0) and view.height == 640
+    u, v = view.px(scene.room.vertices).T
+    assert (u.min(), u.max(), v.min(), v.max()) == (30, 610, 30, 610)
+    assert view.px([0.0, 0.0]).tolist() == [320, 320]
+    assert view.px([0.0, 1.0]).tolist() == [320, 30] and view.px([1.0, 0.0]).tolist() == [610, 320]
+    assert view.inside[320, 320] == 1 and view.inside[35, 35] == 0         # a corner of the canvas: outside
