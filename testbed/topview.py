@@ -19,6 +19,8 @@ TRUTH = (20, 140, 20)
 TRACK = (200, 30, 30)
 CAMERA_ON = (200, 30, 30)
 CAMERA_OFF = (150, 150, 150)
+#: Positions of a track drawn behind it (and kept: no more).
+TAIL = 40
 
 
 class TopView:
@@ -85,7 +87,8 @@ class TopView:
         for i, p in zip(result.track_ids, result.track_xy):
             tail = self.tails.setdefault(int(i), [])
             tail.append(p)
-            cv2.polylines(img, [self.px(np.array(tail[-40:]))], False, TRACK, 1, cv2.LINE_AA)
+            del tail[:-TAIL]
+            cv2.polylines(img, [self.px(np.array(tail))], False, TRACK, 1, cv2.LINE_AA)
             _track_mark(img, tuple(self.px(p)))
             cv2.putText(img, str(int(i)), tuple(self.px(p) + 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, TRACK, 1)
         for n in range(1, len(xy) + 1):

@@ -196,3 +196,25 @@ def test_a_room_centred_on_the_origin_is_drawn_within_the_margins():
     assert view.px([0.0, 0.0]).tolist() == [320, 320]
     assert view.px([0.0, 1.0]).tolist() == [320, 30] and view.px([1.0, 0.0]).tolist() == [610, 320]
     assert view.inside[320, 320] == 1 and view.inside[35, 35] == 0         # a corner of the canvas: outside
+
+
+def test_a_track_s_tail_is_its_last_40_positions_and_no_more_is_kept():
+    """Tails were kept for the whole run (one point per track per frame, for hours of video)."""
+    from testbed.topview import TAIL
+
+    scene = load_scene("lab")
+    view = TopView(scene, width=400)
+    bearings = {n: np.linspace(0.5, -0.5, 64) for n in range(1, 17)}
+    path = np.column_stack([np.linspace(1.0, 5.0, 100), np.full(100, 3.0)])
+    for k, p in enumerate(path):
+        frame = FrameResult(k, (1,), np.zeros((1, 64), bool), [], 0.0, 0.0, 0, (), (), np.zeros((0, 2)),
+                            np.zeros((0, 2)), np.array([7]), p[None])
+        img = view.draw(frame, bearings, title=" ")
+    assert TAIL == 40 and len(view.tails[7]) == TAIL
+    np.testing.assert_array_equal(view.tails[7], path[-TAIL:])
+    untracked = FrameResult(99, (1,), np.zeros((1, 64), bool), [], 0.0, 0.0, 0, (), (), np.zeros((0, 2)),
+                            np.zeros((0, 2)), np.zeros(0, int), np.zeros((0, 2)))
+    drawn = np.any(img != TopView(scene, width=400).draw(untracked, bearings, title=" "), axis=2)
+    row = view.px([0.0, 3.0])[1]
+    us = np.flatnonzero(drawn[row - 1: row + 2].any(axis=0))
+    assert abs(us.min() - view.px(path[-TAIL])[0]) <= 1                  # from the 40th last point on
