@@ -110,7 +110,7 @@ class PipelineParams:
         try:
             data = yamlio.load(text)
         except yaml.YAMLError as exc:
-            raise ValueError(f"{name}: {path} is not valid YAML ({yamlio.error_text(exc)})") from None
+            raise ValueError(f"{name}: {path} is not valid YAML ({yamlio.error_text(exc, text)})") from None
         if isinstance(data, Mapping) and set(data) == {"pipeline"}:
             data = data["pipeline"]
         if data is not None and not isinstance(data, Mapping):        # empty: the defaults

@@ -151,7 +151,7 @@ class Scene:
         try:
             config = yamlio.load(text)
         except yaml.YAMLError as exc:
-            raise ValueError(f"{source}: not valid YAML ({yamlio.error_text(exc)})") from None
+            raise ValueError(f"{source}: not valid YAML ({yamlio.error_text(exc, text)})") from None
         return _parse_scene(config, source)
 
 

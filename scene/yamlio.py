@@ -50,11 +50,23 @@ def load(text: str):
     return yaml.load(text, Loader=Loader)
 
 
-def error_text(exc: yaml.YAMLError) -> str:
+def error_text(exc: yaml.YAMLError, text: str | None = None) -> str:
     """One line for a YAML error: what is wrong and where (its first line alone, e.g.
-    "while parsing a block mapping", says neither)."""
+    "while parsing a block mapping", says neither). A reader's error (a control character)
+    gives a character offset into ``text``, the document it read: its line and column.
+
+    >>> try:
+    ...     load("a: 1\\nb: \\x07")
+    ... except yaml.YAMLError as exc:
+    ...     print(error_text(exc, "a: 1\\nb: \\x07"))
+    unacceptable character #x0007: control characters are not allowed at line 2, column 4
+    """
     problem = getattr(exc, "problem", None)
     mark = getattr(exc, "problem_mark", None)
     if problem is None:
-        return str(exc).splitlines()[0]
+        first = str(exc).splitlines()[0]
+        at = getattr(exc, "position", None)
+        if text is None or not isinstance(at, int) or not 0 <= at <= len(text):
+            return first
+        return first + f" at line {text.count(chr(10), 0, at) + 1}, column {at - text.rfind(chr(10), 0, at)}"
     return problem + ("" if mark is None else f" at line {mark.line + 1}, column {mark.column + 1}")

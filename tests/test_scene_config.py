@@ -331,12 +331,17 @@ def test_yaml_syntax_error_says_what_and_where():
         Scene.from_text(LAB.replace("[640, 480]", "[640, 480"), "s.yaml")
 
 
-def test_a_control_character_is_one_line_naming_it():
+def test_a_control_character_is_one_line_naming_it_and_where_it_is():
     """The reader's errors have no ``problem``: their first line says what is wrong (the
-    next one, 'in "<unicode string>", position N', names no file)."""
+    next one, 'in "<unicode string>", position N', names no file); where it is comes from
+    the character offset (it said nothing of where)."""
     with pytest.raises(ValueError) as err:
         Scene.from_text(LAB.replace("name: lab", "name: l\x07ab"), "s.yaml")
-    assert str(err.value) == "s.yaml: not valid YAML (unacceptable character #x0007: control characters are not allowed)"
+    assert str(err.value) == ("s.yaml: not valid YAML (unacceptable character #x0007: control characters are not "
+                              "allowed at line 6, column 8)")
+    with pytest.raises(ValueError) as err:                               # the first character of the text
+        Scene.from_text("\x07" + LAB, "s.yaml")
+    assert str(err.value).endswith("not allowed at line 1, column 1)")
 
 
 def test_non_utf8_scene_file_is_one_line_naming_the_file(tmp_path):
@@ -379,6 +384,10 @@ def test_params_yaml_syntax_error_says_what_and_where(tmp_path):
     path = tmp_path / "p.yaml"
     path.write_text("angle_deg: [1, 2\n")
     with pytest.raises(ValueError, match=r"params: .*p.yaml is not valid YAML \(.* at line 2, column 1\)"):
+        PipelineParams.from_yaml(path)
+    path.write_text("angle_deg: 3\n\x07\n")
+    with pytest.raises(ValueError, match=r"p.yaml is not valid YAML \(unacceptable character #x0007: .* at line 2, "
+                                         r"column 1\)$"):
         PipelineParams.from_yaml(path)
 
 
