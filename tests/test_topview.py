@@ -218,3 +218,31 @@ def test_a_track_s_tail_is_its_last_40_positions_and_no_more_is_kept():
     row = view.px([0.0, 3.0])[1]
     us = np.flatnonzero(drawn[row - 1: row + 2].any(axis=0))
     assert abs(us.min() - view.px(path[-TAIL])[0]) <= 1                  # from the 40th last point on
+
+
+def test_mosaic_tiles_frames_left_to_right_with_their_scanlines_under_them():
+    """Four 40 x 80 frames, 3 to a row of 300 pixels: tiles 100 x 50 (the frame's aspect),
+    each followed by a 10-pixel strip (black where the scanline is set, light grey where
+    not) and 4 white rows; the fourth frame starts the second row; the rest stays white."""
+    from testbed.topview import mosaic
+
+    grey = np.array([30, 90, 150, 210], np.uint8)
+    rgb = np.broadcast_to(grey[:, None, None, None], (4, 40, 80, 3)).copy()
+    scans = np.zeros((4, 80), bool)
+    for i in range(4):
+        scans[i, 20 * i: 20 * i + 20] = True                 # a quarter of the columns, another each frame
+    out = mosaic(rgb, scans, (1, 5, 9, 13), 300)
+    assert out.shape == (2 * (50 + 10 + 4), 300, 3) and out.dtype == np.uint8
+    for i in range(4):
+        r, c = divmod(i, 3)
+        y, x = 64 * r, 100 * c
+        tile = out[y + 20:y + 50, x:x + 100]                 # below the "cam N" label
+        assert np.all(tile == grey[i])
+        strip = out[y + 50:y + 60, x:x + 100]
+        on = np.zeros(100, bool)
+        on[25 * i: 25 * i + 25] = True                       # 80 columns stretched to 100
+        assert np.all(strip[:, on] == 0) and np.all(strip[:, ~on] == 220)
+        assert np.all(out[y + 60:y + 64, x:x + 100] == 255)
+        assert np.any(out[y:y + 20, x:x + 100] != grey[i])   # the label is drawn on the tile
+    assert np.all(out[64:, 100:] == 255)                     # no fifth or sixth frame
+    assert mosaic(rgb[:3], scans[:3], (1, 5, 9), 300).shape == (64, 300, 3)   # a full row: no empty one under it
