@@ -69,8 +69,6 @@ def check_points(name: str, points, *, allow_empty: bool = False) -> np.ndarray:
     ValueError: centers must have shape (n, 2); got shape (3,)
     """
     arr = _floats(name, points)
-    if arr.ndim == 2 and arr.shape[0] == 0 and allow_empty:
-        return arr.reshape(0, 2)
     if arr.ndim == 1 and arr.size == 0 and allow_empty:
         return arr.reshape(0, 2)
     if arr.ndim != 2 or arr.shape[1] != 2:

@@ -285,3 +285,8 @@ def test_first_camera_inside_a_disc_is_named(cameras, message):
 def test_camera_inside_the_only_disc_is_found():
     with raises("camera_xy: camera 0 is inside object 0"):
         check_cameras_outside_discs(np.array([[0.05, 0.0]]), np.zeros((1, 2)), np.array([0.1]))
+
+
+def test_empty_points_of_another_width_are_refused_even_when_allowed():
+    with raises("centers must have shape (n, 2); got shape (0, 3)"):
+        check_points("centers", np.empty((0, 3)), allow_empty=True)
