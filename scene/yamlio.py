@@ -68,5 +68,7 @@ def error_text(exc: yaml.YAMLError, text: str | None = None) -> str:
         at = getattr(exc, "position", None)
         if text is None or not isinstance(at, int) or not 0 <= at <= len(text):
             return first
-        return first + f" at line {text.count(chr(10), 0, at) + 1}, column {at - text.rfind(chr(10), 0, at)}"
+        before = text[:at]
+        line, column = before.count("\n") + 1, at - before.rfind("\n")
+        return first + f" at line {line}, column {column}"
     return problem + ("" if mark is None else f" at line {mark.line + 1}, column {mark.column + 1}")
