@@ -119,6 +119,12 @@ def test_frozen_and_read_only():
         cam.K[0, 0] = 1.0
 
 
+def _edited(text: str, old: str, new: str) -> str:
+    """A scene file's ``text`` with ``old``, which it must hold once, replaced by ``new``."""
+    assert text.count(old) == 1, old
+    return text.replace(old, new)
+
+
 def _set(config, path, value):
     """A copy of ``config`` with the key or list index at ``path`` set to ``value``."""
     c = copy.deepcopy(config)
@@ -440,9 +446,8 @@ def test_the_bounds_keep_the_built_in_scenes_and_their_edges():
     ("yaw_deg: 70.5", "yaw_deg: 1e300", r"yaw_deg: expected a finite number >= -360 and at most 360 degrees"),
 ])
 def test_render_settings_and_yaw_beyond_any_meaning_are_refused(old, new, match):
-    assert old in LAB
     with pytest.raises(ValueError, match=match):
-        Scene.from_text(LAB.replace(old, new, 1), "s.yaml")
+        Scene.from_text(_edited(LAB, old, new), "s.yaml")
 
 
 # ---- what a scene file may leave out, and the edges of what it may say
@@ -510,8 +515,7 @@ def test_a_built_in_scene_is_named_by_one_of_its_names():
     ("radius: 0.25}", "radius: 0.25}\nuniform_sets: {1: [1]}"),
 ])
 def test_values_at_the_edges_of_their_ranges_load(old, new):
-    assert old in SMALL
-    Scene.from_text(SMALL.replace(old, new))
+    Scene.from_text(_edited(SMALL, old, new))
 
 
 def test_two_people_overlapping_are_refused():
@@ -559,9 +563,8 @@ def test_cameras_without_poses_or_a_ring_elsewhere_are_refused(lab_config):
     ("ring:", "lens: 1\n  ring:", r"^cameras: unknown key 'lens'; expected keys among intrinsics, poses, ring$"),
 ])
 def test_bad_rings_are_one_line(old, new, match):
-    assert old in CIRCLE
     with pytest.raises(ValueError, match=match):
-        Scene.from_text(CIRCLE.replace(old, new))
+        Scene.from_text(_edited(CIRCLE, old, new))
 
 
 def test_a_ring_is_the_studies_cameras_numbered_from_angle_zero():
