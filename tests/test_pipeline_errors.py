@@ -88,6 +88,48 @@ def test_an_empty_parameters_file_is_the_defaults(tmp_path):
     assert load_params(tmp_path / "p.yaml") == PipelineParams()
 
 
+@pytest.mark.parametrize("name", ["threshold_deg", "brightness_floor", "dark_delta", "temporal_alpha",
+                                  "column_threshold"])
+def test_a_boolean_is_not_a_number(tmp_path, name):
+    """``true`` in a file is YAML 1.2's boolean: it would pass as 1.0 (a bool is an int to Python)."""
+    with pytest.raises(ValueError) as err:
+        PipelineParams(**{name: True})
+    assert str(err.value) == f"{name}: expected a number, got True"
+    (tmp_path / "p.yaml").write_text(f"{name}: true\n")
+    with pytest.raises(ValueError) as err:
+        load_params(tmp_path / "p.yaml")
+    assert str(err.value) == f"params: {str(tmp_path / 'p.yaml')!r}: {name}: expected a number, got True"
+
+
+def test_parameters_under_a_pipeline_key(tmp_path):
+    """A file may hold the parameters under one top-level ``pipeline`` key (as a larger
+    configuration file would); beside another key it is an unknown parameter."""
+    (tmp_path / "p.yaml").write_text("pipeline:\n  median_kernel: 5\n  column_threshold: 12.5\n")
+    p = load_params(tmp_path / "p.yaml")
+    assert (p.median_kernel, p.column_threshold) == (5, 12.5)
+    assert p.threshold_deg == 3.0 and p.opening_kernel == 7         # the others: the defaults
+    (tmp_path / "e.yaml").write_text("pipeline:\n")
+    assert load_params(tmp_path / "e.yaml") == PipelineParams()
+    (tmp_path / "q.yaml").write_text("pipeline:\n  median_kernel: 5\nthreshold_deg: 4\n")
+    with pytest.raises(ValueError, match=r"^params: '.*q.yaml': pipeline parameters: unknown key 'pipeline'"):
+        load_params(tmp_path / "q.yaml")
+    (tmp_path / "r.yaml").write_text("pipeline:\n  median_kernel: 4\n")
+    with pytest.raises(ValueError, match=r"^params: '.*r.yaml': median_kernel: expected an odd integer in 1..8191, got 4$"):
+        load_params(tmp_path / "r.yaml")
+
+
+def test_replace_is_a_validated_copy():
+    p = PipelineParams(threshold_deg=5.0)
+    q = p.replace(median_kernel=3, column_threshold=7)
+    assert (q.threshold_deg, q.median_kernel, q.column_threshold) == (5.0, 3, 7.0)
+    assert isinstance(q.column_threshold, float)
+    assert (p.median_kernel, p.column_threshold) == (15, 55.0)         # the original unchanged
+    with pytest.raises(ValueError, match=r"^opening_kernel: expected an odd integer in 1..8191, got 8$"):
+        p.replace(opening_kernel=8)
+    with pytest.raises(TypeError):
+        p.replace(kernel=3)
+
+
 @pytest.mark.parametrize("frames, match", [
     (np.zeros((1, 24, 31, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\) to match the calibration"),
     (np.zeros((2, 24, 32, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\)"),

@@ -167,3 +167,14 @@ def test_a_start_outside_the_search_is_warned_of_with_the_range_searched(tmp_pat
                     "--out", str(tmp_path / "t.yaml"), "--json"]) == 0
     assert capsys.readouterr().err.splitlines()[0].startswith(
         "warning: --params: column_threshold 0.5 is outside the searched range 1..46: ")
+
+
+@pytest.mark.parametrize("trials", [0, -3])
+def test_tune_refuses_fewer_than_one_trial(trials, monkeypatch):
+    """No trial: no best parameters to return (and no F1 of the start)."""
+    cams = tiny_cameras()
+    bg, frames, _ = synthetic_sequence(cams, 1, np.random.default_rng(0))
+    monkeypatch.setattr(pipeline.tuning, "scanline_f1", lambda *a: pytest.fail("a trial ran"))
+    with pytest.raises(ValueError) as err:
+        pipeline.tuning.tune(cams, bg, frames, np.zeros((1, 2, 64), bool), trials)
+    assert str(err.value) == f"trials: expected an integer >= 1, got {trials}"
