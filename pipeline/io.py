@@ -26,6 +26,9 @@ from scene.checks import check_input_file, names
 from .files import write_atomic
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
+#: OpenCV's distortion terms after k1 k2 p1 p2 k3 (rational, thin prism, tilted sensor): a
+#: calibration may hold them when zero
+EXTRA_TERMS = ("k4", "k5", "k6", "s1", "s2", "s3", "s4", "tauX", "tauY")
 
 
 def load_calibration(path: str | os.PathLike, number: int | None = None, name: str = "calibration") -> Camera:
@@ -82,8 +85,11 @@ def load_calibration(path: str | os.PathLike, number: int | None = None, name: s
         dist = np.concatenate([dist, np.zeros(5 - dist.size)])
     elif dist.size > 5:
         if np.any(dist[5:] != 0):
+            i = 5 + int(np.flatnonzero(dist[5:])[0])
+            term = EXTRA_TERMS[i - 5] if i - 5 < len(EXTRA_TERMS) else f"coefficient {i + 1}"
             raise ValueError(f"{name}: {path.name} distortion_coefficients: expected at most 5 "
-                             f"(k1 k2 p1 p2 k3), got {dist.size} non-zero")
+                             f"(k1 k2 p1 p2 k3), got {dist.size} with {term} = {dist[i]:g} "
+                             "(the terms past k3 must be zero)")
         dist = dist[:5]
     if number is None:
         number = stored_number if stored_number is not None else number_in_name(path, default=1)

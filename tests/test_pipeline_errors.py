@@ -254,6 +254,98 @@ def test_the_camera_number_written_in_the_file_counts_over_its_name(tmp_path):
     assert load_calibration(tmp_path / "cam07b.yaml", number=3).number == 3
 
 
+def _write_xml_calibration(path, camera, dist):
+    """``camera``'s calibration as an OpenCV XML file, with ``dist`` as its coefficients."""
+    import cv2
+
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+    fs.write("camera_matrix", camera.K)
+    fs.write("distortion_coefficients", np.asarray(dist, float).reshape(1, -1))
+    fs.write("rvec", cv2.Rodrigues(camera.R)[0])
+    fs.write("tvec", camera.t.reshape(3, 1))
+    fs.write("image_width", camera.width)
+    fs.write("image_height", camera.height)
+    fs.release()
+
+
+@pytest.mark.parametrize("dist, expected", [
+    ([-0.18, 0.06, 0.001, -0.002], [-0.18, 0.06, 0.001, -0.002, 0.0]),                  # k1 k2 p1 p2: k3 = 0
+    ([-0.2], [-0.2, 0.0, 0.0, 0.0, 0.0]),
+    ([-0.18, 0.06, 0.001, -0.002, 0.01, 0, 0, 0], [-0.18, 0.06, 0.001, -0.002, 0.01]),  # rational model, k4-k6 = 0
+    ([-0.18, 0.06, 0.001, -0.002, 0.01] + [0] * 9, [-0.18, 0.06, 0.001, -0.002, 0.01]),
+])
+def test_a_calibration_of_fewer_or_more_distortion_coefficients_is_read_as_five(tmp_path, dist, expected):
+    """OpenCV writes 4, 5, 8, 12 or 14 coefficients; the terms past k3 are the identity when zero."""
+    import cv2
+
+    from pipeline.io import load_calibration
+    from scene import load_scene
+
+    lab = load_scene("lab").cameras[4]
+    _write_xml_calibration(tmp_path / "cam05.xml", lab, dist)
+    cam = load_calibration(tmp_path / "cam05.xml")
+    assert cam.dist.tolist() == expected
+    assert cam.number == 5 and (cam.width, cam.height) == (640, 480)
+    np.testing.assert_array_equal(cam.K, lab.K)
+    np.testing.assert_allclose(cam.R, lab.R, atol=1e-12)
+    np.testing.assert_array_equal(cam.t, lab.t)
+    # the same pixels as OpenCV's own model with every coefficient given
+    points = np.array([[1.0, 2.0, 0.5], [3.0, 1.0, 1.2], [0.5, 4.0, 0.0]])
+    rvec = cv2.Rodrigues(lab.R)[0]
+    full = np.pad(np.asarray(dist, float), (0, max(0, 4 - len(dist))))      # OpenCV takes no fewer than 4
+    theirs = cv2.projectPoints(points, rvec, lab.t, lab.K, full)[0]
+    ours = cv2.projectPoints(points, rvec, lab.t, cam.K, cam.dist)[0]
+    np.testing.assert_allclose(ours, theirs, atol=1e-9)
+
+
+@pytest.mark.parametrize("dist, term", [
+    ([-0.18, 0.06, 0, 0, 0.01, 0, 0.3, 0], "k5 = 0.3"),
+    ([-0.18, 0.06, 0, 0, 0, 1e-9, 0, 0], "k4 = 1e-09"),
+    ([-0.18, 0.06, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, -0.01], "tauY = -0.01"),
+    ([-0.18, 0.06, 0, 0, 0, 0, 0, 0, 0.2, 0.5, 0, 0], "s1 = 0.2"),
+    ([-0.18, 0.06, 0, 0, 0] + [0] * 10 + [0.5], "coefficient 16 = 0.5"),       # more than OpenCV has
+])
+def test_distortion_coefficients_past_k3_that_are_not_zero_are_refused(tmp_path, dist, term):
+    """The message said "got 8 non-zero" of 8 coefficients of which two were zero; it names
+    the first term the pipeline cannot model."""
+    from pipeline.io import load_calibration
+    from scene import load_scene
+
+    _write_xml_calibration(tmp_path / "cam05.xml", load_scene("lab").cameras[4], dist)
+    with pytest.raises(ValueError) as err:
+        load_calibration(tmp_path / "cam05.xml")
+    assert str(err.value) == (f"calibration: cam05.xml distortion_coefficients: expected at most 5 (k1 k2 p1 p2 k3), "
+                              f"got {len(dist)} with {term} (the terms past k3 must be zero)")
+
+
+def test_calibration_keys_may_be_lists_of_numbers(tmp_path):
+    """A hand-written file holds plain lists (``rvec: [1.5, 0, 0]``), not ``!!opencv-matrix``."""
+    from pipeline.io import load_calibration
+
+    text = ("%YAML:1.0\n"
+            "camera_matrix: [700.0, 0, 320.5, 0, 700, 240.5, 0, 0, 1]\n"
+            "distortion_coefficients: [-0.1, 0.02, 0, 0]\n"
+            "rvec: [1.5, 0.0, 0.0]\n"
+            "tvec: [-1, 0.5, 3]\n"
+            "image_width: 640\nimage_height: 480\n")
+    (tmp_path / "cam07.yaml").write_text(text)
+    cam = load_calibration(tmp_path / "cam07.yaml")
+    assert cam.K.tolist() == [[700.0, 0.0, 320.5], [0.0, 700.0, 240.5], [0.0, 0.0, 1.0]]
+    assert cam.dist.tolist() == [-0.1, 0.02, 0.0, 0.0, 0.0]
+    c, s = np.cos(1.5), np.sin(1.5)                                 # 1.5 rad about x
+    np.testing.assert_allclose(cam.R, [[1, 0, 0], [0, c, -s], [0, s, c]], atol=1e-12)
+    assert cam.t.tolist() == [-1.0, 0.5, 3.0] and cam.number == 7
+    for bad, key in (("rvec: [1.5, x, 0.0]", "rvec: expected 3"), ("rvec: [1.5, 0.0]", "rvec: expected 3"),
+                     ("tvec: [-1, 0.5, [3]]", "tvec: expected 3"), ("rvec: [1.5, .nan, 0.0]", "rvec: expected 3"),
+                     ("camera_matrix: [700.0, 0, 320.5, 0, 700, 240.5, 0, 0]", "camera_matrix: expected 9")):
+            line = bad.split(":")[0]
+            edited = "".join(bad + "\n" if t.startswith(line + ":") else t for t in text.splitlines(keepends=True))
+            (tmp_path / "bad.yaml").write_text(edited)
+            with pytest.raises(ValueError) as err:
+                load_calibration(tmp_path / "bad.yaml")
+            assert str(err.value).startswith(f"calibration: bad.yaml {key} finite numbers"), bad
+
+
 def lab_like(dist=(-0.18, 0.06, 0, 0, 0), principal=None):
     c = scene.Camera.from_pose(3, [1.0, 0.05, 2.2], np.radians(90), np.radians(15), 640, 480, np.radians(49),
                                list(dist))
