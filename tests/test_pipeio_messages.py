@@ -118,3 +118,35 @@ def small_params(folder):
     path = folder / "params.yaml"
     path.write_text("opening_kernel: 1\nmedian_kernel: 1\ncolumn_threshold: 2.0\n")
     return path
+
+
+def test_a_label_image_saved_in_colour_reads_as_its_labels(tmp_path):
+    """A grey label image saved as RGB (three equal channels), 8 or 16 bit: the labels, (H, W)."""
+    labels = np.array([[0, 1, 2], [3, 0, 300]])
+    for depth in (np.uint8, np.uint16):
+        want = labels if depth == np.uint16 else labels % 256
+        path = tmp_path / f"{depth.__name__}.png"
+        cv2.imwrite(str(path), np.repeat(want.astype(depth)[..., None], 3, axis=2))
+        assert cv2.imread(str(path), cv2.IMREAD_UNCHANGED).shape == (2, 3, 3)
+        got = read_labels(path)
+        assert got.shape == (2, 3) and got.dtype == np.int32
+        assert got.tolist() == want.tolist()
+
+
+def test_camera_folders_without_frames_are_refused(tmp_path):
+    """frames/camNN folders that hold no PNG (and no frames/camNN.mkv beside them)."""
+    from tests.test_pipeline_cli import small_render_dir
+
+    small_render_dir(tmp_path, 2, 4)
+    for png in (tmp_path / "frames").glob("cam*/*.png"):
+        png.unlink()
+    with pytest.raises(ValueError) as err:
+        RenderDir(tmp_path)
+    assert str(err.value) == f"DIR: {tmp_path / 'frames' / 'cam01'} has no frames"
+    # no masks either for the videos of `render --format video`
+    (tmp_path / "frames" / "cam01.mkv").write_bytes(b"")
+    for png in (tmp_path / "masks").glob("cam*/*.png"):
+        png.unlink()
+    with pytest.raises(ValueError) as err:
+        RenderDir(tmp_path, name="--dir")
+    assert str(err.value) == f"--dir: {tmp_path / 'masks' / 'cam01'} has no frames"
