@@ -118,6 +118,67 @@ def test_parameters_under_a_pipeline_key(tmp_path):
         load_params(tmp_path / "r.yaml")
 
 
+def test_the_bounds_of_each_parameter_are_inside_the_range(tmp_path):
+    """The widest filter, a floor or delta at the largest RGB norm (255 sqrt 3, every pixel
+    dark) and zero floor and delta are parameters; one step beyond each is not."""
+    top = 255 * np.sqrt(3)
+    p = PipelineParams(opening_kernel=8191, spatial_kernel=8191, median_kernel=1, brightness_floor=top,
+                       dark_delta=top, temporal_alpha=1.0)
+    assert (p.opening_kernel, p.spatial_kernel, p.median_kernel) == (8191, 8191, 1)
+    assert p.brightness_floor == p.dark_delta == top
+    q = PipelineParams(brightness_floor=0, dark_delta=0.0)
+    assert (q.brightness_floor, q.dark_delta) == (0.0, 0.0)
+    for changes, message in (({"opening_kernel": 8193}, "opening_kernel: expected an odd integer in 1..8191, got 8193"),
+                             ({"brightness_floor": 442.5}, "brightness_floor: expected a number in [0, 442], got 442.5"),
+                             ({"dark_delta": -0.5}, "dark_delta: expected a finite number >= 0, got -0.5")):
+        with pytest.raises(ValueError) as err:
+            PipelineParams(**changes)
+        assert str(err.value) == message
+
+
+@pytest.mark.parametrize("name", ["opening_kernel", "spatial_kernel", "median_kernel"])
+def test_a_boolean_is_not_a_filter_size(name):
+    """True is an odd integer 1 to Python: ``opening_kernel: true`` would be no opening."""
+    with pytest.raises(ValueError) as err:
+        PipelineParams(**{name: True})
+    assert str(err.value) == f"{name}: expected an odd integer in 1..8191, got True"
+
+
+def test_numpy_and_integer_values_are_kept_as_python_numbers(tmp_path):
+    """A grid search's NumPy scalars and integers in a file become int and float: the
+    parameters write as plain YAML and JSON (PyYAML's safe_dump refuses NumPy scalars)."""
+    import json
+
+    p = PipelineParams(threshold_deg=np.float32(7.5), brightness_floor=np.int64(30), dark_delta=20,
+                       opening_kernel=np.int64(5), median_kernel=np.int32(9), temporal_alpha=1,
+                       column_threshold=np.float64(12.5))
+    types = {k: type(v) for k, v in p.to_dict().items()}
+    assert types == {"threshold_deg": float, "brightness_floor": float, "dark_delta": float, "opening_kernel": int,
+                     "spatial_kernel": int, "temporal_alpha": float, "median_kernel": int, "column_threshold": float}
+    assert json.loads(json.dumps(p.to_dict()))["brightness_floor"] == 30.0
+    p.to_yaml(tmp_path / "p.yaml")
+    assert load_params(tmp_path / "p.yaml") == p
+
+
+def test_parameters_are_written_in_the_order_they_are_documented(tmp_path):
+    PipelineParams().to_yaml(tmp_path / "p.yaml", comment="first\nsecond")
+    lines = (tmp_path / "p.yaml").read_text().splitlines()
+    assert lines[:2] == ["# first", "# second"]
+    assert [line.split(":")[0] for line in lines[2:]] == [
+        "threshold_deg", "brightness_floor", "dark_delta", "opening_kernel", "spatial_kernel", "temporal_alpha",
+        "median_kernel", "column_threshold"]
+    default = [line.split(":")[0] for line in DEFAULT_PATH.read_text().splitlines() if not line.startswith("#")]
+    assert default == [line.split(":")[0] for line in lines[2:]]
+
+
+def test_a_file_that_is_not_yaml_is_named_with_the_option(tmp_path):
+    (tmp_path / "p.yaml").write_text("threshold_deg: [1, 2\n")
+    with pytest.raises(ValueError) as err:
+        load_params(tmp_path / "p.yaml", name="--params")
+    assert str(err.value) == (f"--params: {tmp_path / 'p.yaml'} is not valid YAML (did not find expected ',' or "
+                              "']' at line 2, column 1)")
+
+
 def test_replace_is_a_validated_copy():
     p = PipelineParams(threshold_deg=5.0)
     q = p.replace(median_kernel=3, column_threshold=7)
