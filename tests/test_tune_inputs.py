@@ -178,3 +178,103 @@ def test_tune_refuses_fewer_than_one_trial(trials, monkeypatch):
     with pytest.raises(ValueError) as err:
         pipeline.tuning.tune(cams, bg, frames, np.zeros((1, 2, 64), bool), trials)
     assert str(err.value) == f"trials: expected an integer >= 1, got {trials}"
+
+
+def _f1_by_hand(cams, params, bg, frames, gt):
+    """Pooled scanline F1 of ``params``: 2 TP / (2 TP + FP + FN) over every frame, camera and column."""
+    from pipeline import Pipeline
+
+    pipe = Pipeline(cams, params, bg)
+    pred = np.stack([pipe.process(f) for f in frames])
+    tp, fp, fn = (pred & gt).sum(), (pred & ~gt).sum(), (~pred & gt).sum()
+    return 2 * tp / (2 * tp + fp + fn)
+
+
+def test_tune_returns_the_best_trial_and_the_f1_of_every_trial():
+    from pipeline import Pipeline, PipelineParams
+
+    cams = tiny_cameras()
+    bg, frames, labels = synthetic_sequence(cams, 3, np.random.default_rng(0))
+    gt = np.stack([Pipeline(cams, background=bg).ground_truth(x)[1] for x in labels])
+    start = PipelineParams(column_threshold=3.0, median_kernel=1, opening_kernel=1)
+    seen = []
+    result = pipeline.tuning.tune(cams, bg, frames, gt, 4, seed=0, start=start, progress=seen.append)
+    assert len(result.f1) == 4 and seen == result.f1.tolist()
+    assert result.baseline_f1 == result.f1[0] == pytest.approx(_f1_by_hand(cams, start, bg, frames, gt), abs=1e-12)
+    assert result.best_f1 == max(seen) > 0.9
+    assert _f1_by_hand(cams, result.best, bg, frames, gt) == pytest.approx(result.best_f1, abs=1e-12)
+    assert len(set(seen)) > 1                       # the trials after the start tried other parameters
+
+
+def test_a_start_outside_the_space_raises_no_optuna_warning():
+    """Optuna warns of a fixed parameter out of range, when the trial is queued and when it
+    runs; the command's own warning line says it once, naming the option (docs/pipeline.md)."""
+    import warnings
+
+    from pipeline import PipelineParams
+
+    cams = tiny_cameras()
+    bg, frames, _ = synthetic_sequence(cams, 1, np.random.default_rng(0))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = pipeline.tuning.tune(cams, bg, frames, np.zeros((1, 2, 64), bool), 2,
+                                      start=PipelineParams(threshold_deg=45.0, column_threshold=0.5))
+    assert [str(w.message) for w in caught] == []
+    assert len(result.f1) == 2
+
+
+def test_tune_logs_nothing_of_its_trials():
+    """Optuna logs every trial at INFO ("Trial 0 finished with value ..."), a page of lines
+    over the command's progress bar; tune keeps it to errors, whatever was set before."""
+    import logging
+
+    import optuna
+
+    cams = tiny_cameras()
+    bg, frames, _ = synthetic_sequence(cams, 1, np.random.default_rng(0))
+    records = []
+    handler = logging.Handler()
+    handler.emit = records.append
+    logger = logging.getLogger("optuna")
+    before = optuna.logging.get_verbosity()
+    optuna.logging.set_verbosity(optuna.logging.INFO)
+    logger.addHandler(handler)
+    try:
+        pipeline.tuning.tune(cams, bg, frames, np.zeros((1, 2, 64), bool), 2)
+    finally:
+        logger.removeHandler(handler)
+        optuna.logging.set_verbosity(before)
+    assert [r.getMessage() for r in records] == []
+
+
+def test_the_search_space_is_the_one_documented():
+    """pipeline.tuning.SPACE against the table of docs/pipeline.md."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "pipeline.md").read_text()
+    table = text[text.index("The search covers (`pipeline.tuning.SPACE`):"):].split("\n\n")[1]
+    documented = {}
+    for row in table.splitlines()[2:]:
+        names, values = row.strip("|").split("|")
+        numbers = [float(x) for x in re.findall(r"\d+(?:\.\d+)?", values.split(", at most")[0])]  # not 46
+        if "..." in values:
+            entry = ("int", int(numbers[0]), int(numbers[-1]), int(numbers[1] - numbers[0]))
+        else:
+            entry = ("float", numbers[0], numbers[1])
+        documented.update({name: entry for name in re.findall(r"`(\w+)`", names)})
+    assert documented == pipeline.tuning.SPACE
+
+
+@pytest.mark.parametrize("seed", [0, 2**32 - 1])
+def test_the_seeds_the_command_accepts_seed_the_search(seed):
+    """`tune --seed` takes 0..2**32 - 1 (NumPy's seeds): the largest seeds the search too,
+    and the same seed gives the same trials."""
+    from pipeline import Pipeline
+
+    cams = tiny_cameras()
+    bg, frames, labels = synthetic_sequence(cams, 1, np.random.default_rng(0))
+    gt = np.stack([Pipeline(cams, background=bg).ground_truth(x)[1] for x in labels])
+    runs = [pipeline.tuning.tune(cams, bg, frames, gt, 3, seed=seed) for _ in range(2)]
+    assert runs[0].best == runs[1].best and len(runs[0].f1) == 3
+    assert runs[0].f1.tolist() == runs[1].f1.tolist()
