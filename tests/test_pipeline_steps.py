@@ -546,6 +546,72 @@ def test_production_matches_reference_on_lab_frames():
         np.testing.assert_array_equal(fast.process(f), ref.process(f))
 
 
+def _speckled_sequence(cams, n_frames, rng):
+    """Synthetic frames with what clean people lack: single-pixel specks, one-pixel lines
+    of both orientations, black pixels over the lit room, and a dark corner whose
+    background and frame norms sit exactly on the default floor (25) and difference
+    (40) (as 8-bit whole levels they are exact: (15, 20, 0) has norm 25)."""
+    bg, frames, _ = synthetic_sequence(cams, n_frames, rng)
+    h, w = bg.shape[1:3]
+    bg[:, h - 30:, :30] = (15, 20, 0)                                   # |b| = 25: on the floor
+    frames[:, :, h - 30:, :30] = (15, 20, 0)
+    frames[:, :, h - 30:h - 20, :10] = (15, 20, 40)                     # |a - b| = 40: on the delta
+    frames[:, :, h - 20:h - 10, :10] = (15, 20, 41)                     # just above it
+    frames[:, :, h - 10:, :10] = (9, 12, 0)                             # norm 15, difference 10
+    for f in frames:
+        for i in range(len(cams)):
+            ys, xs = rng.integers(0, h, 200), rng.integers(0, w, 200)
+            f[i, ys, xs] = rng.integers(0, 256, (200, 3))              # specks, black ones too
+            x, y = rng.integers(0, w - 1), rng.integers(0, h - 1)
+            f[i, :, x] = (250, 10, 10)                                  # a one-pixel column
+            f[i, y, :] = (10, 250, 10)                                  # a one-pixel row
+            f[i, 5:12, w - 4:] = 0                                      # black at the right edge
+    return bg, frames
+
+
+@pytest.mark.parametrize("params", [
+    PipelineParams(opening_kernel=1, spatial_kernel=1, median_kernel=1, temporal_alpha=1.0, column_threshold=10),
+    PipelineParams(opening_kernel=3, spatial_kernel=5, median_kernel=5, temporal_alpha=0.5, column_threshold=12),
+    PipelineParams(opening_kernel=1, spatial_kernel=3, median_kernel=7, temporal_alpha=1.0, column_threshold=8,
+                   brightness_floor=0.0),
+    PipelineParams(threshold_deg=10.0, opening_kernel=5, spatial_kernel=1, median_kernel=3, column_threshold=4),
+])
+def test_production_matches_reference_on_speckled_frames(params):
+    """Parameters off the defaults (no filter, small kernels, no floor, integer thresholds that
+    column counts reach exactly) on frames with specks, lines, black pixels and exact ties."""
+    cams = [scene.Camera.from_pose(i + 1, [x, 0.05, 2.2], np.radians(90 + d), np.radians(15), 160, 120,
+                                   np.radians(49), [-0.18, 0.06, 0, 0, 0]) for i, (x, d) in enumerate([(1.5, -20), (5.0, 20)])]
+    bg, frames = _speckled_sequence(cams, 3, np.random.default_rng(11))
+    fast, ref = Pipeline(cams, params, bg), ReferencePipeline(cams, params, bg)
+    for f in frames:
+        expected = fast.step(f)
+        np.testing.assert_array_equal(ref.process(f), expected.scanlines)
+
+
+def test_reference_foreground_on_the_floor_and_delta_ties():
+    """The reference's own foreground on exact ties: |b| = 25 is not below the floor 25, so
+    the angle decides; |a - b| = 40 is not above the delta 40; a black pixel over the lit
+    room is dark (it differs by 120 sqrt 3), and with no floor has no angle: background, as
+    the production test has it."""
+    cam = flat_camera(8, 6)
+    bg = np.full((1, 6, 8, 3), 120, np.uint8)
+    bg[0, 0] = (15, 20, 0)                                        # |b| = 25: the angle decides
+    bg[0, 1] = (9, 12, 0)                                         # |b| = 15: dark
+    frame = bg.copy()
+    frame[0, 0, :3] = [(30, 40, 0), (15, 20, 1), (15, 20, 5)]     # 0, 2.3 and 11.3 degrees off
+    frame[0, 1, :3] = [(9, 12, 40), (9, 12, 41), (9, 12, 39)]     # |a - b| = 40, 41, 39
+    frame[0, 2, :2] = [(0, 0, 0), (1, 0, 0)]                      # black, all but black
+    expected = np.zeros((6, 8), bool)
+    expected[0, 2] = expected[1, 1] = expected[2, 0] = expected[2, 1] = True
+    params = PipelineParams(threshold_deg=3.0, brightness_floor=25.0, dark_delta=40.0)
+    np.testing.assert_array_equal(ReferencePipeline([cam], params, bg).foreground(frame[0], 0), expected)
+    no_floor = PipelineParams(threshold_deg=3.0, brightness_floor=0.0, dark_delta=40.0)
+    expected[2, 0] = False                                        # black: no angle
+    expected[1, :3] = True                                        # 73-75 degrees off (9, 12, 0)
+    np.testing.assert_array_equal(ReferencePipeline([cam], no_floor, bg).foreground(frame[0], 0), expected)
+    np.testing.assert_array_equal(colour_angle_foreground(frame, bg.astype(np.float32), 3.0, 0.0, 40.0)[0], expected)
+
+
 def test_step_returns_the_intermediates_of_process():
     """Pipeline.step: the opened foreground, its rectification, the smoothed column counts
     and the scanlines are each what the step before them gives, and the scanlines are process()'s."""
