@@ -150,3 +150,93 @@ def test_camera_folders_without_frames_are_refused(tmp_path):
     with pytest.raises(ValueError) as err:
         RenderDir(tmp_path, name="--dir")
     assert str(err.value) == f"--dir: {tmp_path / 'masks' / 'cam01'} has no frames"
+
+
+def test_cameras_are_numbered_by_their_file_names_over_the_number_inside(tmp_path):
+    """frames/cam02 goes with calibration/cam02.yaml, whatever camera_number that file holds."""
+    from tests.test_pipeline_cli import small_render_dir
+
+    small_render_dir(tmp_path, 1, 4)
+    path = tmp_path / "calibration" / "cam02.yaml"
+    path.write_text(path.read_text() + "camera_number: 7\n")
+    assert [c.number for c in RenderDir(tmp_path).cameras] == [1, 2]
+
+
+def test_cameras_of_another_height_alone_are_refused(tmp_path):
+    cams = [scene.Camera.from_pose(n, [1.0 + n, 0.05, 2.2], np.radians(70), np.radians(15), 40, h,
+                                   np.radians(49), [0, 0, 0, 0, 0]) for n, h in ((1, 30), (2, 32))]
+    for cam in cams:
+        write_render_dir(tmp_path, [cam], *synthetic_sequence([cam], 1, np.random.default_rng(0)))
+    with pytest.raises(ValueError) as err:
+        RenderDir(tmp_path)
+    assert str(err.value) == ("DIR: calibration/cam02.yaml is 40x32 pixels, calibration/cam01.yaml 40x30; "
+                              "the node pipeline takes cameras of one resolution")
+
+
+def test_uncalibrated_cameras_are_frame_folders_and_videos_only(tmp_path):
+    """A note beside the frames is no camera; a folder or a video without its calibration is,
+    and the first such is named."""
+    from tests.test_pipeline_cli import small_render_dir
+
+    small_render_dir(tmp_path, 1, 4)
+    (tmp_path / "frames" / "cam03.txt").write_text("lens cap on")
+    assert len(RenderDir(tmp_path).cameras) == 2
+    (tmp_path / "frames" / "cam05.mkv").write_bytes(b"")
+    with pytest.raises(ValueError, match=r"^DIR: frames/cam05.mkv has no calibration/cam05.yaml; "):
+        RenderDir(tmp_path)
+    (tmp_path / "frames" / "cam04").mkdir()
+    with pytest.raises(ValueError, match=r"^DIR: frames/cam04 has no calibration/cam04.yaml; "):
+        RenderDir(tmp_path)
+
+
+def test_png_frames_are_read_even_beside_a_video(tmp_path):
+    """A render directory with its PNG frames is read from them; a video beside them is not used."""
+    from tests.test_pipeline_cli import small_render_dir
+
+    small_render_dir(tmp_path, 2, 4)
+    (tmp_path / "frames" / "cam01.mkv").write_bytes(b"not a video")
+    r = RenderDir(tmp_path)
+    assert r.videos is None and r.frame_names == ("000000.png", "000001.png")
+    png = cv2.imread(str(tmp_path / "frames" / "cam01" / "000001.png"))
+    np.testing.assert_array_equal(r.frames(1)[0], png[..., ::-1])
+
+
+def test_frames_in_grey_with_alpha_16_bit_or_an_upper_case_suffix_are_read_as_rgb(tmp_path):
+    """A folder of images is any camera's export: grey, RGBA, 16-bit, `.PNG` are frames too,
+    as 8-bit RGB (16-bit levels / 256)."""
+    folder = tmp_path / "clip"
+    folder.mkdir()
+    grey = np.arange(24, dtype=np.uint8).reshape(4, 6)
+    bgra = np.zeros((4, 6, 4), np.uint8)
+    bgra[..., 0], bgra[..., 1], bgra[..., 2], bgra[..., 3] = 10, 20, 30, 255       # blue 10, red 30
+    cv2.imwrite(str(folder / "f1.png"), grey)
+    cv2.imwrite(str(folder / "f2.png"), bgra)
+    cv2.imwrite(str(folder / "f3.PNG"), bgra[..., :3])
+    cv2.imwrite(str(folder / "f4.png"), np.full((4, 6, 3), (0x0A00, 0x1401, 0x1EFF), np.uint16))
+    got = list(iter_video_frames(folder))
+    assert [(f.shape, f.dtype) for f in got] == [((4, 6, 3), np.uint8)] * 4
+    np.testing.assert_array_equal(got[0], np.repeat(grey[..., None], 3, axis=2))
+    assert got[1][0, 0].tolist() == got[2][0, 0].tolist() == got[3][0, 0].tolist() == [30, 20, 10]
+
+
+def test_names_of_equal_numbers_are_ordered_as_text():
+    """``f01`` and ``f1`` have the same number: ordered by the name itself, whatever the
+    order the folder lists them in."""
+    from pipeline.io import number_order
+
+    assert number_order("f01.png") < number_order("f1.png") < number_order("f2.png") < number_order("f10.png")
+    assert sorted(["f1.png", "f01.png", "f001.png"], key=number_order) == ["f001.png", "f01.png", "f1.png"]
+
+
+def test_a_folder_in_place_of_a_frame_file_is_missing(tmp_path):
+    from tests.test_pipeline_cli import small_render_dir
+
+    small_render_dir(tmp_path, 2, 4)
+    mask = tmp_path / "masks" / "cam02" / "000001.png"
+    mask.unlink()
+    mask.mkdir()
+    r = RenderDir(tmp_path)
+    r.check_complete(1)                                     # frame 0 only: complete
+    with pytest.raises(ValueError) as err:
+        r.check_complete(2)
+    assert str(err.value) == f"DIR: {tmp_path} lacks 1 file of its first 2 frames: masks/cam02/000001.png"

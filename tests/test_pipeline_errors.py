@@ -334,6 +334,7 @@ def _write_xml_calibration(path, camera, dist):
     ([-0.2], [-0.2, 0.0, 0.0, 0.0, 0.0]),
     ([-0.18, 0.06, 0.001, -0.002, 0.01, 0, 0, 0], [-0.18, 0.06, 0.001, -0.002, 0.01]),  # rational model, k4-k6 = 0
     ([-0.18, 0.06, 0.001, -0.002, 0.01] + [0] * 9, [-0.18, 0.06, 0.001, -0.002, 0.01]),
+    ([-0.18, 0.06, 0.001, -0.002, 0.01, 0], [-0.18, 0.06, 0.001, -0.002, 0.01]),       # one zero too many
 ])
 def test_a_calibration_of_fewer_or_more_distortion_coefficients_is_read_as_five(tmp_path, dist, expected):
     """OpenCV writes 4, 5, 8, 12 or 14 coefficients; the terms past k3 are the identity when zero."""
@@ -353,7 +354,7 @@ def test_a_calibration_of_fewer_or_more_distortion_coefficients_is_read_as_five(
     # the same pixels as OpenCV's own model with every coefficient given
     points = np.array([[1.0, 2.0, 0.5], [3.0, 1.0, 1.2], [0.5, 4.0, 0.0]])
     rvec = cv2.Rodrigues(lab.R)[0]
-    full = np.pad(np.asarray(dist, float), (0, max(0, 4 - len(dist))))      # OpenCV takes no fewer than 4
+    full = np.asarray(dist if len(dist) in (4, 5, 8, 12, 14) else expected, float)   # the counts OpenCV takes
     theirs = cv2.projectPoints(points, rvec, lab.t, lab.K, full)[0]
     ours = cv2.projectPoints(points, rvec, lab.t, cam.K, cam.dist)[0]
     np.testing.assert_allclose(ours, theirs, atol=1e-9)
@@ -377,6 +378,19 @@ def test_distortion_coefficients_past_k3_that_are_not_zero_are_refused(tmp_path,
         load_calibration(tmp_path / "cam05.xml")
     assert str(err.value) == (f"calibration: cam05.xml distortion_coefficients: expected at most 5 (k1 k2 p1 p2 k3), "
                               f"got {len(dist)} with {term} (the terms past k3 must be zero)")
+
+
+def test_a_calibration_without_a_number_is_camera_1_and_a_single_coefficient_is_k1(tmp_path):
+    """Neither ``camera_number`` nor ``camNN`` in the name: camera 1. A scalar (not a
+    list) where numbers are expected is one number."""
+    from pipeline.io import load_calibration
+
+    text = _calibration_text(tmp_path).replace("camera_number: 5\n", "")
+    start = text.index("distortion_coefficients:")
+    end = text.index("rvec:")
+    (tmp_path / "lens.yaml").write_text(text[:start] + "distortion_coefficients: -0.25\n" + text[end:])
+    cam = load_calibration(tmp_path / "lens.yaml")
+    assert cam.number == 1 and cam.dist.tolist() == [-0.25, 0.0, 0.0, 0.0, 0.0]
 
 
 def test_calibration_keys_may_be_lists_of_numbers(tmp_path):
