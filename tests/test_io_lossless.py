@@ -183,7 +183,8 @@ def test_a_video_frame_read_again_is_not_decoded_again(tmp_path, monkeypatch):
     got = [r.frames(i) for i in (0, 1, 1, 2, 2, -1)]
     for g, i in zip(got, (0, 1, 1, 2, 2, 2)):
         np.testing.assert_array_equal(g, frames[i])
-    got[1][:] = 0                               # the caller's copy: the next read is the frame's own
+    got[3][:] = 0                               # the callers' copies, decoded and read again: the next
+    got[4][:] = 0                               # read is the frame's own
     np.testing.assert_array_equal(r.frames(2), frames[2])
     assert len(opened) == 1
     r.frames(0)                                 # an earlier frame: decoded from the start
