@@ -540,3 +540,76 @@ def test_run_video_with_no_ffmpeg_is_one_line_naming_it_before_any_frame(tmp_pat
                                     "executable file; install imageio-ffmpeg's binaries or point "
                                     "IMAGEIO_FFMPEG_EXE at an ffmpeg")
     assert captured.out == "" and list(tmp_path.iterdir()) == []
+
+
+def _fake_ffmpeg(tmp_path, monkeypatch, body):
+    """IMAGEIO_FFMPEG_EXE pointed at a shell script standing in for ffmpeg (its last argument
+    is the output file)."""
+    exe = tmp_path / "bin" / "ffmpeg"
+    exe.parent.mkdir()
+    exe.write_text('#!/bin/sh\neval out=\\"\\${$#}\\"\n' + body + "\n")
+    exe.chmod(0o755)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(exe))
+    return tmp_path / "video"
+
+
+def test_ffmpeg_dying_while_frames_are_written_is_one_line_and_leaves_no_file(tmp_path, monkeypatch):
+    """ffmpeg that exits (after starting its file) takes no more frames: the writer names the
+    video, not imageio-ffmpeg's whole command line, and removes what ffmpeg left."""
+    from testbed.video import VideoWriter
+
+    out = _fake_ffmpeg(tmp_path, monkeypatch, 'printf started > "$out"; exit 1')
+    # 1.5 MB a frame: more than a pipe holds, so the write meets the closed pipe
+    with pytest.raises(OSError) as info, VideoWriter(out / "run.mp4", fps=5) as writer:
+        writer.write(np.zeros((720, 720, 3), np.uint8))
+    assert str(info.value) == f"--video: ffmpeg stopped writing {out / 'run.mp4'} (OSError)"
+    assert info.value.__cause__ is None and info.value.__suppress_context__
+    assert list(out.iterdir()) == []                   # its folder was made; ffmpeg's file removed
+
+
+@pytest.mark.parametrize("body", ['cat > /dev/null', 'cat > /dev/null; : > "$out"'],
+                         ids=["no file", "empty file"])
+def test_ffmpeg_writing_nothing_is_a_failure_and_leaves_no_file(tmp_path, monkeypatch, body):
+    """imageio-ffmpeg does not report ffmpeg's exit status: an ffmpeg that took every frame
+    and wrote nothing (or an empty file) is an error, not an empty run.mp4."""
+    from testbed.video import VideoWriter
+
+    out = _fake_ffmpeg(tmp_path, monkeypatch, body)
+    writer = VideoWriter(out / "run.mp4", fps=5)
+    writer.write(np.zeros((32, 32, 3), np.uint8))
+    with pytest.raises(OSError, match=f"^--video: ffmpeg wrote nothing to {out / 'run.mp4'}$"):
+        writer.close()
+    assert list(out.iterdir()) == []
+
+
+def test_a_video_given_no_frame_is_not_written_nor_started(tmp_path, monkeypatch):
+    """No frame, no ffmpeg and no file, whether the run ended cleanly or not."""
+    from testbed.video import VideoWriter
+
+    out = _fake_ffmpeg(tmp_path, monkeypatch, 'printf x > "$out"; touch "$0.ran"')
+    with VideoWriter(out / "a.mp4", fps=5):
+        pass
+    with pytest.raises(KeyboardInterrupt), VideoWriter(out / "b.mp4", fps=5):
+        raise KeyboardInterrupt
+    assert not out.exists() and not (tmp_path / "bin" / "ffmpeg.ran").exists()
+
+
+def test_a_video_closed_cleanly_appears_under_its_name_whole(tmp_path):
+    """Frames of another size than the first are cropped or padded (white) to it; the file
+    appears under its name only, holding every frame."""
+    import imageio_ffmpeg
+
+    from testbed.video import VideoWriter
+
+    path = tmp_path / "run.mp4"
+    with VideoWriter(path, fps=5) as writer:
+        writer.write(np.zeros((33, 47, 3), np.uint8))      # odd sizes: 46 x 32 pixels
+        writer.write(np.zeros((64, 64, 3), np.uint8))      # cropped
+        writer.write(np.zeros((10, 10, 3), np.uint8))      # padded with white
+    assert [p.name for p in tmp_path.iterdir()] == ["run.mp4"]
+    reader = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
+    meta = next(reader)
+    frames = [np.frombuffer(f, np.uint8).reshape(32, 46, 3) for f in reader]
+    assert tuple(meta["size"]) == (46, 32) and len(frames) == 3
+    assert frames[0].max() < 20 and frames[1].max() < 20             # black, lossy
+    assert frames[2][:8, :8].max() < 20 and frames[2][16:, 16:].min() > 235
