@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from shapely import affinity
 from shapely.geometry import MultiPolygon, Point, Polygon, box
 
 from scene.motion import circle_polygon, random_drop, random_waypoint
@@ -252,3 +253,49 @@ def test_a_free_walker_keeps_its_destination_until_it_arrives(monkeypatch):
     assert drawn == [0, 11]                                        # at the start, then in step 12
     np.testing.assert_array_equal(pos[:13, 0], np.column_stack([-0.75 + 0.125 * np.arange(13), np.zeros(13)]))
     np.testing.assert_array_equal(pos[13, 0], [0.75, 0.125])
+
+
+#: A corridor 10 m long at 45 degrees, 1e-5 m wider than a disc of 0.1 m: where a centre may
+#: be is a sliver of 1e-4 m^2 in a bounding box of 49 m^2, which rejection sampling misses.
+SLIVER = affinity.rotate(box(0.0, 0.0, 10.0, 0.2 + 1e-5), 45, origin=(0, 0))
+
+
+def test_random_drop_refuses_a_disc_wider_than_the_room_though_its_area_fits():
+    with pytest.raises(ValueError, match=r"^radii: a disc of radius 0.2 does not fit in the room$"):
+        random_drop(box(0.0, 0.0, 10.0, 0.3), [0.1, 0.2], np.random.default_rng(0))
+
+
+def test_random_drop_says_when_it_cannot_draw_a_place_for_a_disc():
+    with pytest.raises(ValueError, match=r"^radii: could not place a disc of radius 0.1 in the room$"):
+        random_drop(SLIVER, [0.1], np.random.default_rng(0))
+
+
+class _Counting:
+    """A generator that counts the points drawn through ``uniform``."""
+
+    def __init__(self, seed):
+        self.rng, self.points = np.random.default_rng(seed), 0
+
+    def uniform(self, low, high, size):
+        self.points += size[0]
+        return self.rng.uniform(low, high, size)
+
+
+@pytest.mark.parametrize("tries, points", [(1, 64), (64, 64), (127, 64), (128, 128), (4096, 4096)])
+def test_sampling_gives_up_after_its_tries_in_batches_of_64_at_least_one(tries, points):
+    from scene.motion import _inner_regions, _sample_in
+
+    inner = _inner_regions(SLIVER, np.array([0.1]))[0]
+    rng = _Counting(0)
+    assert _sample_in(inner, rng, tries) is None and rng.points == points
+
+
+def test_sampling_returns_the_first_point_drawn_inside_the_region():
+    from scene.motion import _sample_in
+
+    region = box(0.0, 0.0, 0.5, 1.0).union(box(0.5, 0.0, 2.0, 0.01))   # bounding box 2 x 1, a quarter inside
+    pts = np.random.default_rng(4).uniform((0.0, 0.0), (2.0, 1.0), size=(64, 2))
+    inside = np.flatnonzero((pts[:, 0] <= 0.5) | (pts[:, 1] <= 0.01))
+    assert inside[0] > 0                                               # not the first point drawn
+    np.testing.assert_array_equal(_sample_in(region, np.random.default_rng(4), 64), pts[inside[0]])
+
