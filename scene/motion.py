@@ -140,6 +140,14 @@ def random_drop(room: Polygon, radii, rng: np.random.Generator, max_tries: int =
 
 
 # ----------------------------------------------------------------------------- walk
+def _destination(i: int, region: Polygon, radius: float, rng: np.random.Generator) -> np.ndarray:
+    """A random destination for person ``i`` (0-based) in ``region``, or a one-line ValueError."""
+    p = _sample_in(region, rng, 4096)
+    if p is None:
+        raise ValueError(f"radii: could not draw a destination for person {i + 1} (radius {radius}) in the room")
+    return p
+
+
 def _valid_position(i, p, positions, radii, inner) -> bool:
     if not shapely.contains_xy(inner[i], p[0], p[1]):
         return False
@@ -158,6 +166,8 @@ def _proposals(pos: np.ndarray, dest: np.ndarray, radii: np.ndarray, step_len: n
     along the tangent around the nearest such person, turned clockwise.
     """
     m = len(radii)
+    if m == 0:                                   # nobody: no pair to steer around
+        return pos.copy(), np.zeros(0, bool)
     to_dest = dest - pos
     dist = np.linalg.norm(to_dest, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -215,6 +225,9 @@ def random_waypoint(
     turned clockwise (to its right). Every step is then shortened by halving, down to
     not moving, until the new position is inside the room by the radius and overlaps
     nobody.
+
+    Raises ``ValueError`` when the room cannot hold the discs or no destination can be
+    drawn for one of them (a room whose shrunk region is a sliver of its bounding box).
     """
     room = _check_room(room)
     radii = _check_radii(radii)
@@ -239,7 +252,7 @@ def random_waypoint(
                     f"initial: person {i + 1} overlaps another or is not inside the room by its radius"
                 )
 
-    dest = np.array([_sample_in(inner[i], rng, 4096) for i in range(m)])
+    dest = np.array([_destination(i, inner[i], radii[i], rng) for i in range(m)]).reshape(m, 2)
     blocked = np.zeros(m, dtype=int)
     out = np.empty((n_steps, m, 2))
     out[0] = pos
@@ -258,12 +271,12 @@ def random_waypoint(
                     pos[i] = p
                     break
             if arrive[i] and np.allclose(pos[i], dest[i]):
-                dest[i] = _sample_in(inner[i], rng, 4096)
+                dest[i] = _destination(i, inner[i], radii[i], rng)
                 blocked[i] = 0
             elif not moved and speeds[i] > 0:
                 blocked[i] += 1
                 if blocked[i] >= patience:
-                    dest[i] = _sample_in(inner[i], rng, 4096)
+                    dest[i] = _destination(i, inner[i], radii[i], rng)
                     blocked[i] = 0
             else:
                 blocked[i] = 0

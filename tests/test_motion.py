@@ -299,3 +299,20 @@ def test_sampling_returns_the_first_point_drawn_inside_the_region():
     assert inside[0] > 0                                               # not the first point drawn
     np.testing.assert_array_equal(_sample_in(region, np.random.default_rng(4), 64), pts[inside[0]])
 
+
+def test_a_walk_with_no_destination_to_draw_is_refused_in_one_line():
+    """A walk placed in a room where no destination could be drawn failed with
+    'TypeError: unsupported operand type(s) for -: 'NoneType' and 'float''."""
+    from scene.motion import _inner_regions
+
+    start = np.array(_inner_regions(SLIVER, np.array([0.1]))[0].centroid.coords)
+    with pytest.raises(ValueError, match=r"^radii: could not draw a destination for person 1 \(radius 0.1\) "
+                                         r"in the room$"):
+        random_waypoint(SLIVER, [0.1], 3, 0.1, 1.0, np.random.default_rng(0), initial=start)
+
+
+def test_a_walk_of_nobody_is_an_empty_walk():
+    """No disc failed with 'operands could not be broadcast together with shapes (0,) (0,2)'
+    (its destinations were an array of shape (0,)); random_drop gives (0, 2)."""
+    assert random_drop(CIRCLE, [], np.random.default_rng(0)).shape == (0, 2)
+    assert random_waypoint(CIRCLE, [], 3, 0.1, 1.0, np.random.default_rng(0)).shape == (3, 0, 2)
