@@ -613,3 +613,210 @@ def test_a_video_closed_cleanly_appears_under_its_name_whole(tmp_path):
     assert tuple(meta["size"]) == (46, 32) and len(frames) == 3
     assert frames[0].max() < 20 and frames[1].max() < 20             # black, lossy
     assert frames[2][:8, :8].max() < 20 and frames[2][16:, 16:].min() > 235
+
+
+def _runs_bits(scanline):
+    """Run-length bits of one scanline by hand: runs alternate from a run of False (empty when
+    it starts True), each coded in ceil(log2(W + 1)) bits."""
+    from itertools import groupby
+
+    runs = len(list(groupby(scanline.tolist()))) + bool(scanline[0])
+    return runs * int(np.ceil(np.log2(len(scanline) + 1)))
+
+
+def test_each_frame_records_what_was_sent_switched_and_true(lab_episode):
+    """Frames are counted from 0; each records its own true positions, the scanlines its tasked
+    cameras sent, their run-length bits, the cameras switched on and off since the frame
+    before (none before the first) and the residual against 3 people's discs."""
+    scene, truth, source = lab_episode
+    seen = []
+    results = []
+    for r in run_loop(scene, LoopConfig("greedy", 6, update_every=2), truth, source, on_frame=seen.append):
+        assert seen == results + [r]                        # on_frame has it before it is yielded
+        results.append(r)
+    assert [r.index for r in results] == list(range(len(truth)))
+    occupied = 3 * np.pi * 0.25**2
+    for r in results:
+        np.testing.assert_array_equal(r.truth, truth[r.index])
+        np.testing.assert_array_equal(r.scanlines, source.all[r.index][[n - 1 for n in r.tasked]])
+        assert r.bits_sent == sum(_runs_bits(s) for s in r.scanlines)
+        assert r.residual == pytest.approx(r.hull_area / occupied - 1, rel=1e-12)
+    assert results[0].switched_on == () and results[0].switched_off == ()
+    for a, b in pairwise(results):
+        assert b.switched_on == tuple(sorted(set(b.tasked) - set(a.tasked)))
+        assert b.switched_off == tuple(sorted(set(a.tasked) - set(b.tasked)))
+        if b.index % 2:                                      # re-tasked only before frames 2, 4, ...
+            assert b.tasked == a.tasked
+    assert any(r.switched_on for r in results)              # the hull steered greedy somewhere else
+
+
+def test_the_summary_averages_the_frames_and_counts_every_switch(lab_episode):
+    import dataclasses
+
+    scene, truth, source = lab_episode
+    results = list(run_loop(scene, LoopConfig("greedy", 6), truth, source))
+    s = summarise(results, scene)
+    n = len(truth)
+    assert s["frames"] == n
+    assert s["hull_area"] == pytest.approx(sum(r.hull_area for r in results) / n, rel=1e-12)
+    assert s["residual"] == pytest.approx(sum(r.residual for r in results) / n, rel=1e-12)
+    assert s["bits_per_frame"] == pytest.approx(sum(r.bits_sent for r in results) / n, rel=1e-12)
+    switches = sum(len(set(b.tasked) ^ set(a.tasked)) for a, b in pairwise(results))
+    assert switches > 0 and s["camera_switches"] == switches
+    assert s["tracking"]["max_distance"] == pytest.approx(0.75)          # 3 radii of the lab's people
+    assert s["tracking"]["matches"] + s["tracking"]["misses"] == 3 * n
+    smaller = dataclasses.replace(scene, people=dataclasses.replace(scene.people, radius=0.2))
+    assert summarise(results, smaller)["tracking"]["max_distance"] == pytest.approx(0.6)
+
+
+def test_hull_feedback_tasks_from_the_centres_of_the_frame_just_seen(lab_episode, monkeypatch):
+    scene, truth, source = lab_episode
+    given = []
+    spy_on_tasker(monkeypatch, lambda a: given.append(np.array(a[5])))
+    results = list(run_loop(scene, LoopConfig("greedy", 8), truth, source))
+    assert len(given) == len(results) and len(given[0]) == 0              # the first frame: uniform, no estimates
+    for r, estimates in zip(results, given[1:]):
+        assert len(r.estimates) and np.array_equal(estimates, r.estimates)
+
+
+def test_a_summary_of_no_frames_or_nobody_has_no_tracking():
+    lab = load_scene("lab")
+    s = summarise([], lab)
+    assert s["frames"] == 0 and s["camera_switches"] == 0 and s["bits_per_frame"] == 0.0 and s["tracking"] == {}
+    assert np.isnan(s["hull_area"]) and np.isnan(s["residual"])
+    empty = np.zeros((3, 0, 2))
+    bearings = np.tile(np.linspace(0.4, -0.4, 640), (16, 1))
+    results = list(run_loop(lab, LoopConfig("uniform", 6), empty, PrecomputedSource(np.zeros((3, 16, 640)), bearings)))
+    s = summarise(results, lab)
+    assert s["frames"] == 3 and s["tracking"] == {}                     # no max_distance without metrics
+    # nobody to occupy: the residual is against one person's disc
+    assert results[0].residual == pytest.approx(results[0].hull_area / (np.pi * 0.25**2) - 1, rel=1e-12)
+
+
+def test_uniform_never_re_tasks(lab_episode, monkeypatch):
+    scene, truth, source = lab_episode
+    calls = []
+    spy_on_tasker(monkeypatch, lambda a: calls.append(a[0]))
+    results = list(run_loop(scene, LoopConfig("uniform", 6), truth, source))
+    assert calls == ["uniform"] and len({r.tasked for r in results}) == 1
+
+
+def test_incremental_swaps_up_to_m_cameras(lab_episode):
+    scene, truth, source = lab_episode
+    results = list(run_loop(scene, LoopConfig("incremental", 6, m=2), truth, source))
+    changed = [len(set(b.tasked) - set(a.tasked)) for a, b in pairwise(results)]
+    assert max(changed) == 2
+
+
+def test_feedback_tracks_falls_back_to_the_hull_before_a_track_is_confirmed(monkeypatch):
+    from pipeline.rectify import Rectifier
+
+    scene = load_scene("lab")
+    truth = walk(scene, 4, np.random.default_rng(5))
+    bearings = Rectifier.build(scene.cameras).bearings
+    source = PrecomputedSource(_disc_scanlines(scene, truth, bearings), bearings)
+    given = []
+    spy_on_tasker(monkeypatch, lambda a: given.append(np.array(a[5])))
+    results = list(run_loop(scene, LoopConfig("greedy", 8, feedback="tracks"), truth, source))
+    unconfirmed = [i for i, r in enumerate(results[:-1]) if not len(r.track_ids)]
+    assert unconfirmed
+    for i in unconfirmed:
+        assert len(results[i].estimates) and np.array_equal(given[1 + i], results[i].estimates)
+
+
+def test_loop_config_bounds_and_option_names():
+    assert LoopConfig("greedy", 16).check(16).k == 16
+    assert LoopConfig("incremental", 3, m=3).check(16).m == 3
+    assert LoopConfig("greedy", 1, update_every=1).check(1).update_every == 1
+    for config, message in [
+        (LoopConfig("greedy", 0), "k: expected an integer >= 1, got 0"),
+        (LoopConfig("incremental", 3, m=0), "m: expected an integer >= 1, got 0"),
+        (LoopConfig("greedy", 3, update_every=0), "update_every: expected an integer >= 1, got 0"),
+        (LoopConfig("greedy", 3, feedback="truth"), "feedback: unknown value 'truth'; expected one of hull, tracks"),
+    ]:
+        with pytest.raises(ValueError) as info:
+            config.check(16)
+        assert str(info.value).startswith(message), str(info.value)
+        with pytest.raises(ValueError) as info:
+            config.check(16, as_options=True)
+        assert str(info.value).startswith("--" + message.replace("_", "-")), str(info.value)
+
+
+def test_a_frame_in_json_rounds_positions_to_a_tenth_of_a_millimetre():
+    from testbed.loop import FrameResult
+
+    r = FrameResult(index=4, tasked=(3, 1), scanlines=np.zeros((2, 8), bool), polygons=[], hull_area=1.5,
+                    residual=0.25, bits_sent=40, switched_on=(3,), switched_off=(2,),
+                    estimates=np.array([[1.23456, 2.00004]]), truth=np.array([[0.00006, 5.5]]),
+                    track_ids=np.array([7]), track_xy=np.array([[3.14159, 2.71828]]))
+    assert r.to_json() == {"frame": 4, "tasked": [3, 1], "hull_area": 1.5, "residual": 0.25, "bits_sent": 40,
+                           "switched_on": [3], "switched_off": [2], "estimates": [[1.2346, 2.0]],
+                           "truth": [[0.0001, 5.5]], "tracks": [{"id": 7, "xy": [3.1416, 2.7183]}]}
+
+
+def test_a_precomputed_source_serves_the_cameras_asked_for_by_number():
+    scans = np.arange(2 * 4 * 3).reshape(2, 4, 3) % 3 == 0
+    bearings = np.tile([0.1, 0.0, -0.1], (4, 1))
+    source = PrecomputedSource(scans, bearings)
+    assert source.near == {1: 0.0, 2: 0.0, 3: 0.0, 4: 0.0} and source.far == dict.fromkeys((1, 2, 3, 4), np.inf)
+    source.close()                                          # nothing to release: it still serves
+    got, rgb = source.scanlines(1, None, (4, 2))
+    np.testing.assert_array_equal(got, scans[1, [3, 1]])
+    assert rgb is None and list(source.bearings) == [1, 2, 3, 4]
+    placed = PrecomputedSource(scans, bearings, near=[0.5, 0.6, 0.7, 0.8], far=[9, 8, 7, 6])
+    assert placed.near == {1: 0.5, 2: 0.6, 3: 0.7, 4: 0.8} and placed.far == {1: 9.0, 2: 8.0, 3: 7.0, 4: 6.0}
+
+
+def test_a_live_source_renders_only_the_tasked_cameras_and_resets_a_node_switched_on(monkeypatch):
+    """Each tasked camera's frame goes to its own node; a node starts a fresh temporal filter
+    only when it is switched on, not while it stays on."""
+    import render
+    from testbed import loop
+
+    lab = load_scene("lab")
+    rendered, reset, processed = [], [], []
+
+    class Renderer:
+        def __init__(self, scene):
+            self.n = len(scene.cameras)
+
+        def background(self):
+            return type("F", (), {"rgb": np.zeros((self.n, 2, 4, 3), np.uint8)})
+
+        def render(self, positions, cameras, rng):
+            rendered.append(tuple(cameras))
+            return type("F", (), {"rgb": np.stack([np.full((2, 4, 3), c, np.uint8) for c in cameras])})
+
+        def close(self):
+            rendered.append("closed")
+
+    class Pipeline:
+        def __init__(self, cameras, params, background):
+            self.number = cameras[0].number
+            self.bearings = np.array([[0.2, 0.1, 0.0, -0.1]])
+
+        def sight_range(self, height, object_width):
+            return np.array([0.1 * self.number]), np.array([10.0 + self.number])
+
+        def reset(self):
+            reset.append(self.number)
+
+        def process(self, frames):
+            processed.append((self.number, int(frames[0, 0, 0, 0])))
+            return np.array([[self.number % 2 == 0] * 4])
+
+    monkeypatch.setattr(render, "Renderer", Renderer)
+    monkeypatch.setattr(loop, "Pipeline", Pipeline)
+    source = loop.LiveSource(lab, None, np.random.default_rng(0))
+    assert source.near[5] == pytest.approx(0.5) and source.far[5] == pytest.approx(15.0)
+    first, rgb = source.scanlines(0, np.zeros((3, 2)), (3, 4))
+    second, _ = source.scanlines(1, np.zeros((3, 2)), (4, 6))
+    source.scanlines(2, np.zeros((3, 2)), (3, 6))
+    source.close()
+    assert rgb is None and rendered == [(3, 4), (4, 6), (3, 6), "closed"]
+    assert reset == [3, 4, 6, 3]                     # 4 and then 6 stayed on; 3, off in frame 1, is on again
+    assert processed == [(3, 3), (4, 4), (4, 4), (6, 6), (3, 3), (6, 6)]     # each frame to its own node
+    np.testing.assert_array_equal(first, [[False] * 4, [True] * 4])
+    np.testing.assert_array_equal(second, [[True] * 4, [True] * 4])
+    kept = loop.LiveSource(lab, None, np.random.default_rng(0), keep_frames=True)
+    assert kept.scanlines(0, np.zeros((3, 2)), (7,))[1][0, 0, 0, 0] == 7
