@@ -316,3 +316,61 @@ def test_a_walk_of_nobody_is_an_empty_walk():
     (its destinations were an array of shape (0,)); random_drop gives (0, 2)."""
     assert random_drop(CIRCLE, [], np.random.default_rng(0)).shape == (0, 2)
     assert random_waypoint(CIRCLE, [], 3, 0.1, 1.0, np.random.default_rng(0)).shape == (3, 0, 2)
+
+
+def test_without_initial_positions_the_walk_starts_where_random_drop_puts_the_discs():
+    for seed in (42, 43):
+        walked = random_waypoint(CIRCLE, [0.1] * 5, 2, 0.1, 0.5, np.random.default_rng(seed))
+        np.testing.assert_array_equal(walked[0], random_drop(CIRCLE, [0.1] * 5, np.random.default_rng(seed)))
+
+
+def test_a_walker_whose_destination_is_short_of_a_person_walks_straight_to_it(monkeypatch):
+    """Within two steps of touching the person standing at the origin, but its destination
+    (-0.2, 0), touching them, is not beyond them: no turn."""
+    pos = _walk_past_standing(monkeypatch, [[-0.75, 0.0], [0.0, 0.0]], [-0.2, 0.0], 7)
+    expected = np.column_stack([[-0.75, -0.65, -0.55, -0.45, -0.35, -0.25, -0.2], np.zeros(7)])
+    np.testing.assert_allclose(pos[:, 0], expected, atol=1e-12)
+
+
+def test_steps_are_halved_down_to_a_sixteenth_and_a_sixteenth_is_standing_still(monkeypatch):
+    """A destination 0.2 m ahead, 0.13 m from a person standing beside it: a full step, then
+    a quarter (0.025 m), then a sixteenth (0.0047 m, under a tenth of a step: blocked), then
+    nothing (blocked); with patience 2 a new destination is drawn in step 4, not before."""
+    from scene import motion
+
+    steps, drawn = [], []
+    goals = iter([np.array([0.2, 0.0]), np.array([-0.5, 0.0]), np.array([0.0, 0.5])])   # the stander's is never reached
+    monkeypatch.setattr(motion, "_sample_in", lambda region, rng, tries: (drawn.append(len(steps)), next(goals))[1])
+    pos = random_waypoint(CIRCLE, [0.1, 0.1], 5, 0.1, [1.0, 0.0], np.random.default_rng(0),
+                          initial=[[0.0, 0.0], [0.33, 0.0]], patience=2, progress=steps.append)
+    # each valid position: the first fraction of the step that keeps 0.2 m from the person at 0.33
+    np.testing.assert_allclose(pos[:4, 0, 0], [0.0, 0.1, 0.1 + 0.1 / 4, 0.125 + 0.075 / 16], atol=1e-12)
+    np.testing.assert_allclose(pos[:, 0, 1], 0.0, atol=1e-12)
+    assert drawn == [0, 0, 3]                       # walker and stander at the start, then the walker in step 4
+
+
+def test_a_walker_within_a_step_of_a_destination_beyond_someone_steps_around_them(monkeypatch):
+    """A destination 0.08 m ahead, under a big person (radius 0.3) 0.01 m from the small
+    walker (radius 0.05): it walks the tangent, turned clockwise, not towards the destination."""
+    from scene import motion
+
+    goals = iter([np.array([0.08, 0.0]), np.array([0.0, 0.5])])      # the stander's is never reached
+    monkeypatch.setattr(motion, "_sample_in", lambda region, rng, tries: next(goals))
+    pos = random_waypoint(CIRCLE, [0.05, 0.3], 2, 0.1, [1.0, 0.0], np.random.default_rng(0),
+                          initial=[[0.0, 0.0], [0.36, 0.0]])
+    np.testing.assert_allclose(pos[1, 0], [0.0, -0.1], atol=1e-12)
+
+
+def test_an_eighth_of_a_step_is_still_walking_a_sixteenth_is_not(monkeypatch):
+    """Blocked means moving less than a tenth of a step: beside a person at 0.32 m the walker
+    makes a full step, an eighth (0.0125 m: walking), then a sixteenth (0.0055 m: blocked),
+    and with patience 1 draws a new destination in step 3."""
+    from scene import motion
+
+    steps, drawn = [], []
+    goals = iter([np.array([0.2, 0.0]), np.array([-0.5, 0.0]), np.array([0.0, 0.5])])
+    monkeypatch.setattr(motion, "_sample_in", lambda region, rng, tries: (drawn.append(len(steps)), next(goals))[1])
+    pos = random_waypoint(CIRCLE, [0.1, 0.1], 4, 0.1, [1.0, 0.0], np.random.default_rng(0),
+                          initial=[[0.0, 0.0], [0.32, 0.0]], patience=1, progress=steps.append)
+    np.testing.assert_allclose(pos[:4, 0, 0], [0.0, 0.1, 0.1125, 0.1125 + 0.0875 / 16], atol=1e-12)
+    assert drawn == [0, 0, 2]
