@@ -71,3 +71,23 @@ def test_the_bound_counts_each_scanline_column(monkeypatch, capsys, tmp_path):
     scene.write_text(WIDE)
     assert cli.main(["run", str(scene), "--k", "1", "--frames", str(most + 1)]) == 2
     assert f"expected at most {most} frames here" in capsys.readouterr().err
+
+
+def test_check_fits_takes_all_the_memory_available_and_no_more(monkeypatch):
+    monkeypatch.setattr(memory, "available_memory", lambda: 1000)
+    memory.check_fits("--n", 10, "things", 100, "in all")                 # exactly what is available
+    with pytest.raises(ValueError) as info:
+        memory.check_fits("--n", 11, "things", 100, "in all")
+    assert str(info.value) == ("--n: 11 things would hold about 1.1e-06 GB of memory in all, more than the 1e-06 GB "
+                               "available; expected at most 10 things here")
+
+
+def test_check_fits_leaves_what_the_rest_of_the_run_holds(monkeypatch):
+    monkeypatch.setattr(memory, "available_memory", lambda: 3_000_000_000)
+    memory.check_fits("--n", 10, "things", 100_000_000, "in all", reserved=2_000_000_000)
+    with pytest.raises(ValueError) as info:
+        memory.check_fits("--n", 11, "things", 100_000_000, "in all", reserved=2_000_000_000, beside=" beside X")
+    assert str(info.value) == ("--n: 11 things would hold about 1.1 GB of memory in all, more than the 1 GB available "
+                               "beside X; expected at most 10 things here")
+    with pytest.raises(ValueError, match=r"more than the -1 GB available; expected at most 0 things here$"):
+        memory.check_fits("--n", 1, "things", 1, "in all", reserved=4_000_000_000)   # the rest alone is too much
