@@ -33,4 +33,4 @@ def gigabytes(n: float) -> str:
     >>> gigabytes(24.6e9), gigabytes(1.71e12), gigabytes(3e8)
     ('24.6 GB', '1,710 GB', '0.3 GB')
     """
-    return f"{n / 1e9:.3g} GB" if n < 1e12 else f"{n / 1e9:,.0f} GB"
+    return f"{n / 1e9:.3g} GB" if n < 999.5e9 else f"{n / 1e9:,.0f} GB"   # 999.5 GB: "1e+03" in 3 digits

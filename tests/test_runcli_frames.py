@@ -91,3 +91,9 @@ def test_check_fits_leaves_what_the_rest_of_the_run_holds(monkeypatch):
                                "beside X; expected at most 10 things here")
     with pytest.raises(ValueError, match=r"more than the -1 GB available; expected at most 0 things here$"):
         memory.check_fits("--n", 1, "things", 1, "in all", reserved=4_000_000_000)   # the rest alone is too much
+
+
+def test_sizes_just_under_a_terabyte_are_not_printed_in_exponent_notation():
+    """999.6 GB was printed '1e+03 GB' (three significant digits round it up to 1000)."""
+    assert [memory.gigabytes(n) for n in (999.4e9, 999.6e9, 1e12, 2.5e9)] == ["999 GB", "1,000 GB", "1,000 GB",
+                                                                              "2.5 GB"]
