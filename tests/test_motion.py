@@ -374,3 +374,21 @@ def test_an_eighth_of_a_step_is_still_walking_a_sixteenth_is_not(monkeypatch):
                           initial=[[0.0, 0.0], [0.32, 0.0]], patience=1, progress=steps.append)
     np.testing.assert_allclose(pos[:4, 0, 0], [0.0, 0.1, 0.1125, 0.1125 + 0.0875 / 16], atol=1e-12)
     assert drawn == [0, 0, 2]
+
+
+def test_arriving_clears_the_steps_a_walker_was_blocked(monkeypatch):
+    """A walker touching a person who walks off ahead of it is blocked in step 1 and arrives
+    in step 2; its next destination is under a person standing beside it: blocked in steps 3
+    and 4. With patience 2 it draws a new one in step 4: the block before its arrival does
+    not count towards the ones after."""
+    from scene import motion
+
+    steps, drawn = [], []
+    goals = iter([np.array([0.1, 0.0]), np.array([0.8, 0.0]), np.array([-0.5, 0.0]), np.array([0.1, -0.1])])
+    monkeypatch.setattr(motion, "_sample_in",
+                        lambda region, rng, tries: (drawn.append(len(steps)), next(goals, np.array([-0.5, 0.5])))[1])
+    pos = random_waypoint(CIRCLE, [0.1] * 3, 5, 0.1, [1.0, 1.0, 0.0], np.random.default_rng(0),
+                          initial=[[0.0, 0.0], [0.2, 0.0], [0.1, -0.2]], patience=2, progress=steps.append)
+    np.testing.assert_allclose(pos[:, 0], [[0.0, 0.0], [0.0, 0.0], [0.1, 0.0], [0.1, 0.0], [0.1, 0.0]], atol=1e-12)
+    np.testing.assert_allclose(pos[:, 1, 0], [0.2, 0.3, 0.4, 0.5, 0.6], atol=1e-12)
+    assert drawn == [0, 0, 0, 1, 3]                # the three at the start; the walker in steps 2 and 4
