@@ -20,11 +20,11 @@ def check_fits(option: str, count: int, unit: str, each: int, held: str, *, rese
     """Raise a one-line ValueError naming ``option`` when ``count`` ``unit`` of ``each``
     bytes, held as ``held`` says, are more than the memory available now, less ``reserved``
     bytes that something else of the run holds (``beside`` names it)."""
-    free = available_memory() - reserved
+    free = max(0, available_memory() - reserved)
     need = count * each
     if need > free:
         raise ValueError(f"{option}: {count} {unit} would hold about {gigabytes(need)} of memory {held}, more than "
-                         f"the {gigabytes(free)} available{beside}; expected at most {max(0, free) // each} {unit} "
+                         f"the {gigabytes(free)} available{beside}; expected at most {free // each} {unit} "
                          "here")
 
 

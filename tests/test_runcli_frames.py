@@ -89,7 +89,7 @@ def test_check_fits_leaves_what_the_rest_of_the_run_holds(monkeypatch):
         memory.check_fits("--n", 11, "things", 100_000_000, "in all", reserved=2_000_000_000, beside=" beside X")
     assert str(info.value) == ("--n: 11 things would hold about 1.1 GB of memory in all, more than the 1 GB available "
                                "beside X; expected at most 10 things here")
-    with pytest.raises(ValueError, match=r"more than the -1 GB available; expected at most 0 things here$"):
+    with pytest.raises(ValueError, match=r"more than the 0 GB available; expected at most 0 things here$"):
         memory.check_fits("--n", 1, "things", 1, "in all", reserved=4_000_000_000)   # the rest alone is too much
 
 
