@@ -120,3 +120,143 @@ def test_an_opening_taller_than_the_image_is_empty(render_dir, tmp_path):
     assert camtask(["scanlines", str(render_dir), "--params", str(tmp_path / "p.yaml"),
                     "--out", str(tmp_path / "s.npz"), "--json"]) == 0
     assert not np.load(tmp_path / "s.npz")["scanlines"].any()
+
+
+def main_line(capsys, argv):
+    """``camtask ARGV`` through the entry point: its exit code and its standard error's lines."""
+    from testbed.cli import main
+
+    capsys.readouterr()
+    code = main(argv)
+    return code, capsys.readouterr().err.splitlines()
+
+
+@pytest.mark.parametrize(("argv", "line"), [
+    (["{render}", "--frames", "0"], "--frames: expected an integer >= 1, got 0"),
+    (["{render}", "--frames", "-3"], "--frames: expected an integer >= 1, got -3"),
+    (["{render}", "--video", "{video}"], "give either DIR or --video, not both"),
+    (["--video", "{video}"], "--video needs --calibration FILE and --background N"),
+    (["--video", "{video}", "--calibration", "{calib}"], "--video needs --calibration FILE and --background N"),
+    (["--video", "{video}", "--background", "1"], "--video needs --calibration FILE and --background N"),
+    ([], "expected a render directory DIR, or --video FILE_OR_FOLDER"),
+    (["--video", "{video}", "--calibration", "{calib}", "--background", "0"],
+     "--background: expected an integer >= 1, got 0"),
+    (["--video", "{video}", "--calibration", "{calib}", "--background", "1", "--frames", "0"],
+     "--frames: expected an integer >= 1, got 0"),
+])
+def test_scanlines_usage_errors_are_one_line_and_write_nothing(render_dir, tmp_path, capsys, argv, line):
+    before = sorted(p.relative_to(render_dir) for p in render_dir.rglob("*"))
+    given = {"render": render_dir, "video": render_dir / "frames" / "cam01",
+             "calib": render_dir / "calibration" / "cam01.yaml"}
+    argv = ["scanlines", *(a.format(**given) for a in argv), "--out", str(tmp_path / "s.npz")]
+    assert main_line(capsys, argv) == (2, [f"camtask scanlines: error: {line}"])
+    assert list(tmp_path.iterdir()) == []
+    assert sorted(p.relative_to(render_dir) for p in render_dir.rglob("*")) == before
+
+
+def test_scanlines_on_a_dataset_of_several_episodes_asks_for_one(tmp_path, capsys):
+    ds = tmp_path / "ds"
+    for name in ("episode_0000", "episode_0001"):
+        (ds / name).mkdir(parents=True)
+    (ds / "manifest.json").write_text("{}")
+    assert main_line(capsys, ["scanlines", str(ds), "--out", str(tmp_path / "s.npz")]) == (
+        2, [(f"camtask scanlines: error: DIR: {ds} is a dataset of 2 episodes; give one episode folder, "
+            f"e.g. {ds / 'episode_0000'}")])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ds"]
+
+
+def test_the_people_size_of_an_episode_where_no_one_walked_is_its_scenes(render_dir, tmp_path, capsys):
+    """No row in people.csv: the smallest person the scene in meta.json could have held, not none."""
+    import json
+
+    import yaml
+
+    from pipeline import Pipeline, PipelineParams
+    from scene import scene_path
+
+    root = tmp_path / "render"
+    shutil.copytree(render_dir, root)
+    (root / "people.csv").write_text("frame,person_id,x,y,radius,height\n")
+    assert main_line(capsys, ["scanlines", str(root), "--frames", "1", "--out", str(tmp_path / "a.npz")])[0] == 0
+    assert "blind_radius" not in np.load(tmp_path / "a.npz").files           # nor a scene: no size known
+    config = yaml.safe_load(scene_path("lab").read_text())
+    config["people"].update(height=1.5, radius=0.2)
+    (root / "meta.json").write_text(json.dumps({"scene_yaml": yaml.safe_dump(config)}))
+    assert main_line(capsys, ["scanlines", str(root), "--frames", "1", "--out", str(tmp_path / "b.npz")])[0] == 0
+    pipe = Pipeline(RenderDir(root).cameras, PipelineParams())
+    with np.load(tmp_path / "b.npz") as z:
+        for prefix, truth in (("", False), ("gt_", True)):
+            near, far = pipe.sight_range(1.5, truth=truth, object_width=0.4)
+            np.testing.assert_array_equal(z[f"{prefix}blind_radius"], near)
+            np.testing.assert_array_equal(z[f"{prefix}sight_radius"], far)
+
+
+def test_the_people_size_is_the_shortest_and_the_thinnest_persons(render_dir, tmp_path, capsys):
+    """Two people, one taller and thinner: the height of the one, the diameter of the other."""
+    from pipeline import Pipeline, PipelineParams
+
+    root = tmp_path / "render"
+    shutil.copytree(render_dir, root)
+    (root / "people.csv").write_text("frame,person_id,x,y,radius,height\n0,0,1.0,2.0,0.3,1.5\n"
+                                     "0,1,3.0,2.0,0.2,1.9\n")
+    assert main_line(capsys, ["scanlines", str(root), "--frames", "1", "--out", str(tmp_path / "s.npz")])[0] == 0
+    pipe = Pipeline(RenderDir(root).cameras, PipelineParams())
+    with np.load(tmp_path / "s.npz") as z:
+        for prefix, truth in (("", False), ("gt_", True)):      # the true scanlines' far edge depends on the width
+            near, far = pipe.sight_range(1.5, truth=truth, object_width=0.4)
+            np.testing.assert_array_equal(z[f"{prefix}blind_radius"], near)
+            np.testing.assert_array_equal(z[f"{prefix}sight_radius"], far)
+
+
+def test_a_meta_json_without_a_scene_gives_no_people_size(render_dir, tmp_path, capsys):
+    root = tmp_path / "render"
+    shutil.copytree(render_dir, root)
+    (root / "meta.json").write_text('{"episode": 0}')
+    assert main_line(capsys, ["scanlines", str(root), "--frames", "1", "--out", str(tmp_path / "s.npz")])[0] == 0
+    assert "blind_radius" not in np.load(tmp_path / "s.npz").files
+
+
+def test_frames_beyond_the_render_directory_take_all_of_it(render_dir, tmp_path, capsys):
+    assert main_line(capsys, ["scanlines", str(render_dir), "--frames", "99", "--out", str(tmp_path / "s.npz"),
+                              "--json"]) == (0, [])                  # --json: no progress bar either
+    assert np.load(tmp_path / "s.npz")["scanlines"].shape == (4, 2, 160)
+
+
+def test_a_render_directory_beside_a_manifest_json_of_its_own_is_still_one(render_dir, tmp_path, capsys):
+    """A manifest.json makes a folder a dataset only when it has no calibration/ of its own."""
+    root = tmp_path / "render"
+    shutil.copytree(render_dir, root)
+    (root / "manifest.json").write_text("{}")
+    assert main_line(capsys, ["scanlines", str(root), "--out", str(tmp_path / "s.npz"), "--json"])[0] == 0
+    assert np.load(tmp_path / "s.npz")["scanlines"].shape == (4, 2, 160)
+
+
+def test_a_dataset_with_no_episode_is_named_so(tmp_path, capsys):
+    (tmp_path / "ds").mkdir()
+    (tmp_path / "ds" / "manifest.json").write_text("{}")
+    code, err = main_line(capsys, ["scanlines", str(tmp_path / "ds"), "--out", str(tmp_path / "s.npz")])
+    assert code == 2 and err == [(f"camtask scanlines: error: DIR: {tmp_path / 'ds'} is a dataset of 0 episodes; "
+                                 f"give one episode folder, e.g. {tmp_path / 'ds' / 'episode_0000'}")]
+
+
+@pytest.mark.parametrize(("command", "name"), [(["scanlines"], "scanlines.npz"),
+                                               (["tune", "--trials", "1"], "tuned_params.yaml")])
+def test_the_default_output_in_an_episode_of_a_dataset_asks_for_out(render_dir, fake_dataset, capsys, command, name):
+    episode = fake_dataset / "episode_0000"
+    episode.rmdir()
+    shutil.copytree(render_dir, episode)
+    before = sorted(p.relative_to(fake_dataset) for p in fake_dataset.rglob("*"))
+    assert main_line(capsys, [command[0], str(episode), *command[1:]]) == (
+        2, [(f"camtask {command[0]}: error: --out: {episode} is an episode of the dataset {fake_dataset}, whose "
+            f"manifest.json checksums its files; give --out FILE to write {name} elsewhere")])
+    assert sorted(p.relative_to(fake_dataset) for p in fake_dataset.rglob("*")) == before
+
+
+def test_a_video_without_json_prints_its_frames_and_bandwidth_only(render_dir, tmp_path, capsys):
+    """No ground truth for a video: no table of precision and recall."""
+    out = tmp_path / "s.npz"
+    capsys.readouterr()
+    assert camtask(["scanlines", "--video", str(render_dir / "frames" / "cam01"), "--calibration",
+                    str(render_dir / "calibration" / "cam01.yaml"), "--background", "1", "--out", str(out)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 2 and lines[0] == f"3 frames x 1 cameras -> {out}" and lines[1].startswith("bandwidth: ")
