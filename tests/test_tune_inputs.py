@@ -278,3 +278,53 @@ def test_the_seeds_the_command_accepts_seed_the_search(seed):
     runs = [pipeline.tuning.tune(cams, bg, frames, gt, 3, seed=seed) for _ in range(2)]
     assert runs[0].best == runs[1].best and len(runs[0].f1) == 3
     assert runs[0].f1.tolist() == runs[1].f1.tolist()
+
+
+@pytest.mark.parametrize(("argv", "line"), [
+    (["--trials", "0"], "--trials: expected an integer >= 1, got 0"),
+    (["--trials", "-2"], "--trials: expected an integer >= 1, got -2"),
+    (["--trials", "1", "--frames", "0"], "--frames: expected an integer >= 1, got 0"),
+    (["--trials", "1", "--frames", "-1"], "--frames: expected an integer >= 1, got -1"),
+])
+def test_trials_or_frames_below_one_are_one_line_and_write_nothing(render_dir, tmp_path, capsys, no_work, argv, line):
+    from testbed.cli import main
+
+    capsys.readouterr()
+    assert main(["tune", str(render_dir), *argv, "--out", str(tmp_path / "t.yaml"),
+                 "--plot", str(tmp_path / "t.png")]) == 2
+    assert capsys.readouterr().err.splitlines() == [f"camtask tune: error: {line}"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_plot_that_is_not_a_png_is_refused_first(render_dir, tmp_path, capsys, no_work):
+    from testbed.cli import main
+
+    capsys.readouterr()
+    assert main(["tune", str(render_dir), "--trials", "1", "--out", str(tmp_path / "t.yaml"),
+                 "--plot", str(tmp_path / "t.jpg")]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"camtask tune: error: --plot: expected a .png file name, got '{tmp_path / 't.jpg'}'"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_summary_counts_the_frames_tuned_on_and_the_bar_the_best_trial(render_dir, tmp_path, capsys,
+                                                                           monkeypatch):
+    """--frames 99 of a 3-frame directory tunes on 3; the progress bar's best is the best
+    trial so far, not the last one."""
+    import json
+
+    from pipeline.tuning import TuneResult
+    from testbed.cli import main
+
+    def tune(cameras, background, frames, gt, trials, seed, start, progress):
+        for f1 in (0.75, 0.5):
+            progress(f1)
+        return TuneResult(best=start, best_f1=0.75, baseline_f1=0.75, f1=[0.75, 0.5])
+    monkeypatch.setattr(pipeline.tuning, "tune", tune)
+    capsys.readouterr()
+    assert main(["tune", str(render_dir), "--trials", "2", "--frames", "99", "--out", str(tmp_path / "t.yaml"),
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["frames"] == 3
+    assert main(["tune", str(render_dir), "--trials", "2", "--out", str(tmp_path / "t.yaml")]) == 0
+    bar = capsys.readouterr().err.replace("\r", "\n").splitlines()
+    assert [x for x in bar if x.startswith("tune: 100%")][-1].endswith("best=0.7500, f1=0.5000]")

@@ -57,3 +57,11 @@ def test_trials_are_counted_in_whole_numbers(figure, f1):
 def test_the_title_gives_the_result(figure):
     ax = figure([0.9973, 0.89, 0.9986]).axes[0]
     assert ax.get_title() == "best scanline F1 0.9986 (trial 3 of 3); start 0.9973"
+
+
+def test_ticks_at_or_beyond_zero_and_one_have_no_label():
+    """A logit axis has no point at F1 0 or 1: a tick there is left blank, not labelled."""
+    from testbed.commands.tune import _decimal
+
+    assert [_decimal(y) for y in (0.0, 1.0, -0.5, 1.5)] == ["", "", "", ""]
+    assert [_decimal(y) for y in (1e-9, 1 - 1e-9)] == ["0.000000001", "0.999999999"]
