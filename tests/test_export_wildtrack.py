@@ -306,3 +306,120 @@ def test_ctrl_c_while_an_earlier_export_is_replaced_keeps_a_whole_one(tmp_path, 
     assert (out / "grid.json").is_file()         # a whole export, the old or the new one
     assert sorted(p.name for p in tmp_path.iterdir()) == ["data", "wild"]
     assert main(["export", "wildtrack", str(data), str(out), "--overwrite"]) == 0
+
+
+def hand_made_episode(folder):
+    """A one-frame episode of one person, two small cameras, no manifest (test_export_episodes)."""
+    import numpy as np
+
+    from tests.test_export_episodes import H, W, make_episode
+
+    mask = np.zeros((H, W), np.uint8)
+    mask[5:9, 10:12] = 1
+    return make_episode(folder, np.array([[[1.0, 2.0]]]), {(2, 0): mask})
+
+
+def export_files(root):
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
+
+
+@pytest.mark.parametrize(("argv", "line"), [
+    (["--episode", "-1"], "--episode: expected an integer >= 0, got -1"),
+    (["--boxes", "all"], None),                     # argparse's own choices
+])
+def test_bad_options_are_one_line_and_write_nothing(tmp_path, capsys, argv, line):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    capsys.readouterr()
+    if line is None:
+        with pytest.raises(SystemExit) as stop:
+            main(["export", "wildtrack", str(episode.parent), str(tmp_path / "wt"), *argv])
+        assert stop.value.code == 2 and "argument --boxes: invalid choice: 'all'" in capsys.readouterr().err
+    else:
+        assert main(["export", "wildtrack", str(episode.parent), str(tmp_path / "wt"), *argv]) == 2
+        assert capsys.readouterr().err.splitlines() == [f"camtask export: error: {line}"]
+    assert not (tmp_path / "wt").exists()
+
+
+def test_an_out_that_is_a_file_is_refused_and_kept(tmp_path, capsys):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    (tmp_path / "wt").write_text("mine")
+    capsys.readouterr()
+    for extra in ([], ["--overwrite"]):
+        assert main(["export", "wildtrack", str(episode), str(tmp_path / "wt"), *extra]) == 2
+        assert capsys.readouterr().err.splitlines() == [
+            f"camtask export: error: OUT: {tmp_path / 'wt'} exists and is not a directory"]
+    assert (tmp_path / "wt").read_text() == "mine"
+
+
+@pytest.mark.parametrize("grid", ["not json {", '{"layout": "wildtrack"}', "[1, 2]",
+                                  '{"layout": "other", "cell_m": 0.025, "position_id": {}, "views": []}'])
+def test_overwrite_refuses_a_folder_whose_grid_json_is_not_an_exports(tmp_path, capsys, grid):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    out = tmp_path / "wt"
+    out.mkdir()
+    (out / "grid.json").write_text(grid)
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(episode), str(out), "--overwrite"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"camtask export: error: --overwrite: {out} is not an export of camtask (its grid.json is not one; it holds "
+        "grid.json); empty it yourself or choose another folder")]
+    assert export_files(out) == {"grid.json": grid.encode()}
+
+
+def test_an_episode_option_that_agrees_with_an_episode_dir_is_taken(tmp_path, capsys):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    assert main(["export", "wildtrack", str(episode), str(tmp_path / "a")]) == 0
+    assert main(["export", "wildtrack", str(episode), str(tmp_path / "b"), "--episode", "0"]) == 0
+    assert main(["export", "wildtrack", str(episode.parent), str(tmp_path / "c"), "--episode", "0"]) == 0
+    a = export_files(tmp_path / "a")
+    assert "annotations_positions/00000000.json" in a
+    assert export_files(tmp_path / "b") == a == export_files(tmp_path / "c")
+
+
+def test_a_dir_or_episode_that_is_not_there_is_named(tmp_path, capsys):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    (tmp_path / "file").write_text("x")
+    capsys.readouterr()
+    for folder, extra, line in (
+            (tmp_path / "none", [], (f"DIR: {tmp_path / 'none'}: no such folder (expected a dataset or episode folder "
+                                    "written by `camtask render`)")),
+            (tmp_path / "file", [], (f"DIR: {tmp_path / 'file'}: not a folder (expected a dataset or episode folder "
+                                    "written by `camtask render`)")),
+            (episode.parent, ["--episode", "3"], (f"DIR: no episode 3 in {episode.parent} (expected "
+                                                 f"{episode.parent / 'episode_0003'}/meta.json)"))):
+        assert main(["export", "wildtrack", str(folder), str(tmp_path / "wt"), *extra]) == 2
+        assert capsys.readouterr().err.splitlines() == [f"camtask export: error: {line}"]
+    assert not (tmp_path / "wt").exists()
+
+
+def test_an_out_that_holds_the_current_folder_is_refused(tmp_path, monkeypatch, capsys):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    (tmp_path / "wt" / "here").mkdir(parents=True)
+    monkeypatch.chdir(tmp_path / "wt" / "here")
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(episode), str(tmp_path / "wt"), "--overwrite"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"camtask export: error: OUT: {tmp_path / 'wt'} is the current folder or holds it, which the export would "
+        "replace; give a folder beside it")]
+    assert (tmp_path / "wt" / "here").is_dir()
+
+
+def test_an_episode_folder_that_is_a_link_is_checked_where_its_manifest_lists_it(tmp_path, capsys):
+    """The manifest lists the link by its name beside it; OUT inside the folder it points to is refused."""
+    import json
+
+    from testbed.episodes import checksums
+
+    target = hand_made_episode(tmp_path / "elsewhere" / "episode_0000")
+    (tmp_path / "ds").mkdir()
+    (tmp_path / "ds" / "episode_0000").symlink_to(target, target_is_directory=True)
+    entry = {"index": 0, "name": "episode_0000", "seed": 0, "spawn_key": [0], "frames": 1, "files": checksums(target)}
+    (tmp_path / "ds" / "manifest.json").write_text(json.dumps({"format_version": 2, "checksum": "blake3",
+                                                               "episodes_planned": 1, "episodes": [entry]}))
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(tmp_path / "ds"), str(target / "wt")]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"camtask export: error: OUT: {target / 'wt'} is inside DIR {tmp_path / 'ds' / 'episode_0000'}; "
+        "choose a folder outside the dataset")]
+    assert main(["export", "wildtrack", str(tmp_path / "ds"), str(tmp_path / "wt")]) == 0
+    assert "no manifest lists" not in capsys.readouterr().err and (tmp_path / "wt" / "grid.json").is_file()
