@@ -22,7 +22,10 @@ def run(capsys, *argv):
     (["--episodes", "0"], "--episodes: expected an integer >= 1, got 0"),
     (["--frames", "-1"], "--frames: expected an integer >= 1, got -1"),
     (["--workers", "-2"], "--workers: expected an integer >= 0, got -2"),
+    (["--workers", "-1"], "--workers: expected an integer >= 0, got -1"),
     (["--cameras", "3,99"], "--cameras: expected distinct camera numbers"),
+    (["--cameras", "1,x"], "--cameras: expected comma-separated camera numbers, got '1,x'"),
+    (["--cameras", ","], "--cameras: expected distinct camera numbers among 1..16, got []"),
     (["--people", "17"], "expected at most 16"),
     (["--seed", "-1"], "--seed: expected an integer in 0..4294967295, got -1"),
 ])
@@ -810,3 +813,177 @@ def test_a_file_that_cannot_be_read_keeps_its_errno(tmp_path):
     with pytest.raises(FileNotFoundError) as err:
         file_digest(tmp_path / "gone.png")
     assert err.value.errno == errno.ENOENT and str(err.value).startswith(f"cannot read {tmp_path / 'gone.png'}: ")
+
+
+def test_an_out_that_is_a_file_is_refused_and_kept(tmp_path, capsys):
+    (tmp_path / "ds").write_text("mine")
+    for extra in ([], ["--resume"], ["--overwrite"]):
+        code, line = run(capsys, "lab", "--frames", "1", "--out", str(tmp_path / "ds"), "--workers", "0", *extra)
+        assert (code, line) == (2, f"camtask render: error: --out: {tmp_path / 'ds'} exists and is not a directory")
+    assert (tmp_path / "ds").read_text() == "mine"
+
+
+def test_resume_and_overwrite_together_are_refused(tmp_path, capsys):
+    from testbed.generate import check_out
+
+    with pytest.raises(SystemExit) as stop:             # the command line: argparse's exclusive group
+        main(["render", "lab", "--out", str(tmp_path / "ds"), "--resume", "--overwrite"])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1] == ("camtask render: error: argument --overwrite: not allowed "
+                                                        "with argument --resume")
+    with pytest.raises(ValueError, match=r"^--resume and --overwrite: expected at most one of them$"):
+        check_out(tmp_path / "ds", resume=True, overwrite=True)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_run_that_stopped_on_bad_input_forgets_only_a_manifest_of_no_episodes(tmp_path):
+    from testbed.commands.render import forget_run
+
+    (tmp_path / "manifest.json").write_text("not json {")   # not one of ours: kept, not deleted
+    forget_run(tmp_path)
+    assert (tmp_path / "manifest.json").read_text() == "not json {"
+    forget_run(tmp_path / "none")                           # no manifest at all
+    assert not (tmp_path / "none").exists()
+
+
+def test_video_on_an_existing_cluster_checks_its_workers_ffmpeg_and_png_does_not(tmp_path, capsys, monkeypatch):
+    import contextlib
+
+    from testbed import generate, parallel
+
+    @contextlib.contextmanager
+    def client(workers, scheduler):
+        yield object()
+
+    def no_ffmpeg(client):
+        raise ValueError("--scheduler: worker tcp://10.0.0.1:1 cannot write --format video (no ffmpeg)")
+
+    def rendering(*args, **kwargs):
+        raise ValueError("rendering started")
+
+    monkeypatch.setattr(parallel, "open_client", client)
+    monkeypatch.setattr(parallel, "wait_for_a_worker", lambda client, scheduler: None)
+    monkeypatch.setattr(generate, "check_worker_versions", lambda client: None)
+    monkeypatch.setattr(generate, "check_workers_share", lambda client, out: None)
+    monkeypatch.setattr(generate, "check_workers_ffmpeg", no_ffmpeg)
+    monkeypatch.setattr(generate, "generate", rendering)
+    for fmt, message in (("video", "--scheduler: worker tcp://10.0.0.1:1 cannot write --format video (no ffmpeg)"),
+                         ("png", "rendering started")):
+        out = tmp_path / fmt / "ds"
+        code, line = run(capsys, "lab", "--frames", "1", "--format", fmt, "--out", str(out),
+                         "--scheduler", "tcp://10.0.0.5:8786")
+        assert (code, line) == (2, f"camtask render: error: {message}")
+        assert not (tmp_path / fmt).exists()
+
+
+def test_machine_errors_of_a_run_on_an_existing_cluster_are_one_line():
+    from distributed import KilledWorker
+
+    from testbed.commands.render import machine_error
+
+    full = OSError(28, "No space left on device")
+    assert machine_error(full, "tcp://10.0.0.5:8786") == "[Errno 28] No space left on device"
+    assert machine_error(ValueError("a bug"), "tcp://10.0.0.5:8786") is None
+    worker = type("Worker", (), {"address": "tcp://10.0.0.7:4000"})()
+    for failures, processes in ((0, "1 worker process"), (2, "3 worker processes")):
+        died = KilledWorker("episode-0003", worker, allowed_failures=failures)
+        assert machine_error(died) == (f"episode 3: {processes} died running it (the last at tcp://10.0.0.7:4000; "
+                                       "out of memory?)")
+
+
+def test_machine_error_imports_no_dask_when_no_cluster_was_used():
+    import subprocess
+    import sys
+
+    code = ("import sys; from testbed.commands.render import machine_error; "
+            "print(machine_error(ValueError('x')), 'distributed' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                          env={**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])})
+    assert done.stdout.split() == ["None", "False"]
+
+
+def test_video_without_an_ffmpeg_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(tmp_path / "no-ffmpeg"))
+    code, line = run(capsys, "lab", "--frames", "1", "--format", "video", "--out", str(tmp_path / "ds"),
+                     "--workers", "0")
+    assert (code, line) == (1, (f"camtask render: error: ffmpeg: '{tmp_path / 'no-ffmpeg'}' (IMAGEIO_FFMPEG_EXE) is "
+                               "not an executable file; install imageio-ffmpeg's binaries or point "
+                               "IMAGEIO_FFMPEG_EXE at an ffmpeg"))
+    assert not (tmp_path / "ds").exists()
+
+
+def test_a_manifest_that_lists_episodes_is_not_forgotten(tmp_path):
+    from testbed.commands.render import forget_run
+    from tests.test_tune_verify import dataset
+
+    root = dataset(tmp_path / "ds", 1)
+    before = (root / "manifest.json").read_text()
+    forget_run(root)
+    assert (root / "manifest.json").read_text() == before
+
+
+def test_overwrite_refuses_a_dataset_that_holds_the_runs_params_deeper_down(tmp_path, capsys):
+    from pipeline import load_params
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import prepare_output
+
+    out = tmp_path / "ds"
+    prepare_output(out, EpisodeConfig("lab", None, (1,), 1, 0, "png", load_params().to_dict()), 1, False, False)
+    (out / "notes").mkdir()
+    (out / "notes" / "p.yaml").write_text("column_threshold: 3.0\n")
+    code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", "--overwrite", "--frames", "1",
+                     "--params", str(out / "notes" / "p.yaml"))
+    assert (code, line) == (2, (f"camtask render: error: --overwrite: --params {out / 'notes' / 'p.yaml'} lies in "
+                               f"{out}, which --overwrite empties; move it out of the dataset first"))
+    assert (out / "notes" / "p.yaml").is_file()
+
+
+def test_bad_input_found_once_a_resumed_run_started_keeps_its_manifest(tmp_path, capsys, monkeypatch):
+    """Only a new run's manifest of no episodes is forgotten: --resume's was there before."""
+    from testbed import generate
+
+    out = tmp_path / "ds"
+    argv = ("lab", "--frames", "1", "--cameras", "1", "--episodes", "2", "--out", str(out), "--workers", "0")
+
+    def bad_input(*args, **kwargs):
+        raise ValueError("background: black")
+    monkeypatch.setattr(generate, "generate", bad_input)
+    assert run(capsys, *argv) == (2, "camtask render: error: background: black")
+    assert not out.exists()                                  # a new run: nothing left
+    out.mkdir()
+    from pipeline import load_params
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (1,), 1, 0, "png", load_params().to_dict())
+    generate.prepare_output(out, config, 2, False, False)    # a run stopped before its first episode
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    assert generate.MANIFEST in before
+    assert run(capsys, *argv, "--resume") == (2, "camtask render: error: background: black")
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
+def test_one_default_worker_renders_in_this_process(tmp_path, capsys, monkeypatch):
+    """On a machine of one core, no cluster of one worker is started for two episodes."""
+    import contextlib
+
+    from testbed import parallel
+
+    seen = []
+
+    @contextlib.contextmanager
+    def client(workers, scheduler):
+        seen.append(workers)
+        raise ValueError("no cluster here")
+        yield
+    monkeypatch.setattr(parallel, "default_workers", lambda: 1)
+    monkeypatch.setattr(parallel, "open_client", client)
+    assert run(capsys, "lab", "--frames", "1", "--episodes", "2", "--out", str(tmp_path / "ds"))[0] == 2
+    assert seen == [0]
+
+
+def test_a_scene_of_floor_plane_cameras_is_refused_before_any_work(tmp_path, capsys):
+    code, line = run(capsys, "circle", "--frames", "1", "--out", str(tmp_path / "ds"), "--workers", "0")
+    assert (code, line) == (2, ("camtask render: error: scene: 'circle' has floor-plane cameras only; rendering needs "
+                               "calibrated cameras (the circular simulation is `camtask study cameras`, `static`, "
+                               "`moving`, `tracking`)"))
+    assert not (tmp_path / "ds").exists()
