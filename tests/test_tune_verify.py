@@ -117,3 +117,42 @@ def test_a_manifest_at_its_bounds_is_read(tmp_path, capsys):
     m = json.loads((root / MANIFEST).read_text())
     (root / MANIFEST).write_text(json.dumps(m | {"episodes_planned": 0, "episode_layout": 1}))
     assert verify(capsys, root)[:2] == (0, [f"{root}: 2 episodes intact (4 files, blake3)"])
+
+
+def test_an_unfinished_run_is_said_so_without_failing(tmp_path, capsys):
+    root = dataset(tmp_path / "ds", 1)
+    manifest = json.loads((root / MANIFEST).read_text())
+    manifest["episodes_planned"] = 5
+    (root / MANIFEST).write_text(json.dumps(manifest))
+    code, out, _ = verify(capsys, root)
+    assert code == 0 and out == ["2 of 5 planned episodes listed: an unfinished run (`--resume` finishes it)",
+                                 f"{root}: 2 episodes intact (4 files, blake3)"]
+
+
+@pytest.mark.parametrize("meta", ["not json {", '{"episode": 1}', "[1, 2]"])
+def test_a_changed_meta_json_that_names_no_episode_is_only_changed(tmp_path, capsys, meta):
+    root = dataset(tmp_path / "ds", 1)
+    (root / "episode_0001" / "meta.json").write_text(meta)
+    code, out, _ = verify(capsys, root)
+    assert code == 1 and out == ["episode_0001: 1 changed (meta.json)",
+                                 f"{root}: 1 of 2 episodes differ from {MANIFEST} (episode_0001)"]
+
+
+def test_an_episode_named_dot_is_sent_to_its_dataset(tmp_path, capsys, monkeypatch):
+    root = dataset(tmp_path / "ds", 1)
+    monkeypatch.chdir(root / "episode_0000")
+    assert main(["verify", "."]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"camtask verify: error: DIR: . is an episode of the dataset {root.resolve()}, whose {MANIFEST} lists it: "
+        f"verify the dataset (camtask verify {root.resolve()})")]
+
+
+def test_one_episode_of_a_manifest_that_plans_none_is_intact(tmp_path, capsys):
+    root = dataset(tmp_path / "ds", 1)
+    shutil.rmtree(root / "episode_0001")
+    manifest = json.loads((root / MANIFEST).read_text())
+    manifest["episodes"] = manifest["episodes"][:1]
+    del manifest["episodes_planned"]
+    (root / MANIFEST).write_text(json.dumps(manifest))
+    code, out, _ = verify(capsys, root)
+    assert code == 0 and out == [f"{root}: 1 episode intact (2 files, blake3)"]
