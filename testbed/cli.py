@@ -133,7 +133,7 @@ def _dispatch(argv: list[str] | None) -> int:
         print(f"camtask {args.command}: error: {exc}", file=sys.stderr)
         return 1
     except MemoryError as exc:              # NumPy's says how much it asked for ("Unable to allocate 45 GiB ...")
-        print(f"camtask {args.command}: error: out of memory ({exc or 'no details'})", file=sys.stderr)
+        print(f"camtask {args.command}: error: out of memory ({str(exc) or 'no details'})", file=sys.stderr)
         return 1
     except (KeyboardInterrupt, SystemError) as exc:     # SystemError: a signal in numba's dispatcher
         code = stops.report_stop(exc, f"camtask {args.command}")

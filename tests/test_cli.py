@@ -143,3 +143,54 @@ def test_ctrl_c_that_numba_turned_into_a_system_error_is_one_line(monkeypatch, c
     monkeypatch.setattr(verify, "run", broken)
     with pytest.raises(SystemError, match="a real bug"):
         cli.main(["verify", "x"])
+
+
+def test_a_broken_pipe_beside_a_stdout_that_cannot_be_flushed_is_an_error(monkeypatch, capsys):
+    """A standard output closed, or failing for another reason, says nothing of a reader
+    that has gone: the BrokenPipeError (from a socket, a subprocess) is the command's error."""
+    import io
+
+    from testbed.commands import study
+
+    def broken(args):
+        raise BrokenPipeError(32, "Broken pipe")
+    monkeypatch.setattr(study, "run", broken)
+    for error in (OSError(5, "Input/output error"), ValueError("I/O operation on closed file.")):
+        class Failing(io.StringIO):
+            def flush(self, error=error):
+                raise error
+        monkeypatch.setattr(sys, "stdout", Failing())
+        assert cli.main(["study", "cameras"]) == 1
+        assert capsys.readouterr().err == "camtask study: error: [Errno 32] Broken pipe\n"
+
+
+def test_out_of_memory_is_one_line_with_what_numpy_asked_for(monkeypatch, capsys):
+    from testbed.commands import verify
+
+    for error, says in ((MemoryError("Unable to allocate 45.0 GiB for an array with shape (100000, 640, 480, 3)"),
+                         "Unable to allocate 45.0 GiB for an array with shape (100000, 640, 480, 3)"),
+                        (MemoryError(), "no details")):
+        def out_of_memory(args, error=error):
+            raise error
+        monkeypatch.setattr(verify, "run", out_of_memory)
+        assert cli.main(["verify", "x"]) == 1
+        assert capsys.readouterr().err == f"camtask verify: error: out of memory ({says})\n"
+
+
+def test_a_broken_pipe_beside_a_stdout_pipe_still_read_is_an_error(monkeypatch, capsys):
+    import os
+
+    from testbed.commands import study
+
+    def broken(args):
+        raise BrokenPipeError(32, "Broken pipe")
+    monkeypatch.setattr(study, "run", broken)
+    read, write = os.pipe()                                 # its reader is still there
+    try:
+        with os.fdopen(write, "w") as stdout:
+            monkeypatch.setattr(sys, "stdout", stdout)
+            assert cli.main(["study", "cameras"]) == 1
+            assert capsys.readouterr().err == "camtask study: error: [Errno 32] Broken pipe\n"
+            monkeypatch.undo()
+    finally:
+        os.close(read)
