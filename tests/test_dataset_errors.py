@@ -987,3 +987,29 @@ def test_a_scene_of_floor_plane_cameras_is_refused_before_any_work(tmp_path, cap
                                "calibrated cameras (the circular simulation is `camtask study cameras`, `static`, "
                                "`moving`, `tracking`)"))
     assert not (tmp_path / "ds").exists()
+
+
+def test_overwrite_counts_what_it_deletes_as_free(tmp_path, capsys, monkeypatch):
+    """1.5 MB free and 2 MB of an old dataset to delete: room for an episode of 3 MB."""
+    from pipeline import load_params
+    from testbed import generate
+    from testbed.episodes import EpisodeConfig
+
+    out = tmp_path / "ds"
+    generate.prepare_output(out, EpisodeConfig("lab", None, (1,), 1, 0, "png", load_params().to_dict()), 1,
+                            False, False)
+    (out / "episode_0000").mkdir()
+    (out / "episode_0000" / "old.bin").write_bytes(b"\1" * 2_000_000)
+    looks = []
+
+    def free_bytes(path):
+        looks.append(path)
+        return (1_500_000 if len(looks) == 1 else 10**10), "/fake"
+
+    def rendering(*args, **kwargs):
+        raise ValueError("rendering started")
+    monkeypatch.setattr(generate, "estimate_bytes", lambda config, scene, episodes: 3_000_000 * episodes)
+    monkeypatch.setattr(generate, "free_bytes", free_bytes)
+    monkeypatch.setattr(generate, "generate", rendering)
+    assert run(capsys, "lab", "--frames", "1", "--cameras", "1", "--out", str(out), "--workers", "0",
+               "--overwrite") == (2, "camtask render: error: rendering started")
