@@ -1013,3 +1013,21 @@ def test_overwrite_counts_what_it_deletes_as_free(tmp_path, capsys, monkeypatch)
     monkeypatch.setattr(generate, "generate", rendering)
     assert run(capsys, "lab", "--frames", "1", "--cameras", "1", "--out", str(out), "--workers", "0",
                "--overwrite") == (2, "camtask render: error: rendering started")
+
+
+def test_the_column_threshold_is_checked_against_the_cameras_rendered(tmp_path, capsys):
+    """Camera 2 pitched down to 35 degrees has a taller rectified column (790 rows) than
+    camera 1 (552): --cameras 1 is held to camera 1's."""
+    import yaml
+
+    from scene import scene_path
+
+    config = yaml.safe_load(scene_path("lab").read_text())
+    config["cameras"]["poses"][1]["pitch_deg"] = 35.0
+    (tmp_path / "scene.yaml").write_text(yaml.safe_dump(config))
+    (tmp_path / "p.yaml").write_text("column_threshold: 600\n")
+    code, line = run(capsys, str(tmp_path / "scene.yaml"), "--cameras", "1", "--frames", "1", "--params",
+                     str(tmp_path / "p.yaml"), "--out", str(tmp_path / "ds"), "--workers", "0")
+    assert (code, line) == (2, ("camtask render: error: --params: column_threshold 600 "
+                               "exceeds the 552 pixels of a rectified column; every scanline would be empty"))
+    assert not (tmp_path / "ds").exists()
