@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import shapely
 
 from scene.motion import random_drop
 from testbed.studies import core
@@ -66,3 +67,38 @@ def test_pruning_keeps_pieces_a_fraction_of_a_millimetre_apart_separate():
     pruned = [limit_residual(centers, r, h=h, min_area=OBJ)[1] / OBJ for h in (0.002, 0.0005)]
     assert abs(pruned[0] - pruned[1]) < 0.01
     assert 0.24 < pruned[1] < 0.246
+
+
+def test_no_disc_or_no_disc_inside_the_room_has_no_residual():
+    assert limit_residual(np.zeros((0, 2)), 0.1) == (0.0, 0.0)
+    # a disc outside the room crosses none of the room's rows
+    assert limit_residual([[0.0, 1.5], [0.3, 1.5]], 0.1) == (0.0, 0.0)
+
+
+def test_chunks_of_points_do_not_change_the_limit():
+    """The midpoints are tested in chunks; a chunk of one point holds chunks of points inside a
+    disc alone (nothing left to test for coverage)."""
+    centers = random_drop(core.circle_room(), np.full(4, 0.1), np.random.default_rng(5))
+    whole = limit_residual(centers, 0.1, h=0.01)
+    assert whole[0] > 0
+    assert limit_residual(centers, 0.1, h=0.01, chunk=1) == whole
+    assert limit_residual(centers, 0.1, h=0.01, chunk=7) == whole
+
+
+def test_three_discs_around_a_point_leave_a_piece_between_them_that_is_pruned():
+    """Three discs at 0.15 from the origin, 120 degrees apart, cover every line through the
+    origin (covered() above): the limit hull holds a piece between them, apart from the discs
+    and smaller than one disc, so pruning removes it with the other small pieces; both values
+    lie under a 1000-camera hull's and close to them."""
+    c = 0.15 * np.array([[1.0, 0.0], [-0.5, 0.75**0.5], [-0.5, -0.75**0.5]])
+    raw, pruned = limit_residual(c, 0.1, h=0.002)
+    room = core.circle_room()
+    xy, yaw = core.circle_cameras(1000)
+    hull = core.visual_hull_of_discs(xy, yaw, np.pi, c, 0.1, room)
+    pieces = [g.area for g in hull.geoms]
+    centre = next(g for g in hull.geoms if g.contains(shapely.Point(0, 0)))
+    assert 0.05 * OBJ < centre.area < OBJ                  # the piece between the discs
+    kept = sum(a for a in pieces if a >= OBJ) - 3 * OBJ
+    assert raw <= hull.area - 3 * OBJ + 1e-9 and pruned <= kept + 1e-9
+    assert hull.area - 3 * OBJ - raw < 0.01 * OBJ and kept - pruned < 0.01 * OBJ
+    assert raw - pruned > centre.area - 0.01 * OBJ         # the centre piece went with the pruning
