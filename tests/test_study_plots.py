@@ -95,3 +95,41 @@ def test_tracking_title_counts_its_objects(monkeypatch, tmp_path):
                      "--pairs", "uniform:4", "--plot", str(tmp_path / "t.png")]) == 0
     assert titles == ["Fig. 14: the object, true and estimated tracks",
                       "Fig. 14: one of 3 objects, true and estimated tracks"]
+
+
+def legend_labels(ax):
+    legend = ax.get_legend()
+    return [t.get_text() for t in legend.get_texts()] if legend else []
+
+
+def test_moving_figures_9_and_10_hold_their_series(drawn, monkeypatch):
+    """Fig. 9: uniform, greedy and incremental at its smallest period; fig. 10: incremental at
+    every period, with uniform for reference. Greedy alone leaves fig. 10 empty, and it says why."""
+    from testbed.studies import moving
+
+    monkeypatch.setattr(moving, "save_figure", lambda fig, path: (fig.canvas.draw(), drawn.append(fig)))
+    recs = [{"tasker": t, "k": k, "update_every": u, "residual": 1.0 + k + u, "residual_sem": 0.1, "trials": 2,
+             "steps": 3} for t, u in (("uniform", 1), ("greedy", 1), ("incremental", 5), ("incremental", 2))
+            for k in (2, 3)]
+    moving.plot({"records": recs}, "unused.png")
+    moving.plot({"records": [r for r in recs if r["tasker"] == "greedy"]}, "unused.png")
+    (fig9, fig10), (greedy9, greedy10) = drawn[0].axes, drawn[1].axes
+    assert legend_labels(fig9) == ["uniform", "greedy", "incremental/2"]
+    assert legend_labels(fig10) == ["uniform", "incremental/5", "incremental/2"]
+    assert legend_labels(greedy9) == ["greedy"] and greedy10.get_legend() is None
+    assert [t.get_text() for t in greedy10.texts] == ["no incremental or uniform\nin --taskers"]
+    assert list(fig9.texts) == [] and list(fig10.texts) == []
+    # each series keeps its colour in both panels
+    colours9, colours10 = ({c.get_label(): c.lines[0].get_color() for c in ax.containers} for ax in (fig9, fig10))
+    assert colours9["uniform"] == colours10["uniform"] and colours9["incremental/2"] == colours10["incremental/2"]
+
+
+def test_one_object_leaves_figure_6_empty_and_says_why(drawn):
+    """One object's exact limit is 0: nothing to scale by, so figure 6 has no curve."""
+    cameras.plot(cameras_result(objects=(1,)), "unused.png")
+    fig, = drawn
+    assert not fig.axes[1].has_data()
+    assert [t.get_text() for t in fig.axes[1].texts] == ["no object count\nwith a nonzero limit"]
+    cameras.plot(cameras_result(objects=(1, 2)), "unused.png")
+    assert drawn[1].axes[1].has_data() and list(drawn[1].axes[1].texts) == []
+    assert legend_labels(drawn[1].axes[1]) == ["2"]
