@@ -133,3 +133,23 @@ def test_one_object_leaves_figure_6_empty_and_says_why(drawn):
     cameras.plot(cameras_result(objects=(1, 2)), "unused.png")
     assert drawn[1].axes[1].has_data() and list(drawn[1].axes[1].texts) == []
     assert legend_labels(drawn[1].axes[1]) == ["2"]
+
+
+def test_static_and_lab_figures_draw_each_tasker_and_the_all_camera_reference(drawn, monkeypatch):
+    """static (figure 8): residual vs k per tasker on a log scale; lab (figure 13): linear, with
+    the all-camera residual as a dashed reference line."""
+    from testbed.studies import core, lab, static
+
+    monkeypatch.setattr(core, "save_figure", lambda fig, path: (fig.canvas.draw(), drawn.append(fig)))
+    recs = [{"tasker": t, "k": k, "residual": r / k, "residual_sem": 0.1, "trials": 3}
+            for t, r in (("uniform", 6.0), ("greedy", 3.0)) for k in (2, 4)]
+    static.plot({"records": recs}, "unused.png")
+    lab.plot({"records": recs, "cameras": 16, "scene": "lab", "all_cameras_residual": 1.25}, "unused.png")
+    (fig8,), (fig13,) = drawn[0].axes, drawn[1].axes
+    assert fig8.get_yscale() == "log" and fig13.get_yscale() == "linear"
+    assert legend_labels(fig8) == ["uniform", "greedy"]
+    assert sorted(legend_labels(fig13)) == ["all 16 cameras", "greedy", "uniform"]
+    greedy = next(c for c in fig8.containers if c.get_label() == "greedy")
+    assert greedy.lines[0].get_xdata().tolist() == [2, 4] and greedy.lines[0].get_ydata().tolist() == [1.5, 0.75]
+    (reference,) = [line for line in fig13.get_lines() if line.get_label() == "all 16 cameras"]
+    assert reference.get_linestyle() == "--" and set(reference.get_ydata()) == {1.25}

@@ -72,8 +72,12 @@ def test_parse_ints_sorts_merges_and_bounds_ranges():
     assert len(core.parse_ints("k", "1-100000")) == 100_000         # MAX_RANGE values: allowed
     with pytest.raises(ValueError, match=r"^--k: a range of at most 100000 values, got '1-100001'$"):
         core.parse_ints("k", "1-100001")
-    with pytest.raises(ValueError, match=r"^--k: expected integers like '2,3,4' or '2-8', got '5-2'$"):
-        core.parse_ints("k", "5-2")
+    for text in ("5-2", "3-2"):                                     # a range downwards, even by one
+        with pytest.raises(ValueError, match=rf"^--k: expected integers like '2,3,4' or '2-8', got '{text}'$"):
+            core.parse_ints("k", text)
+    # a negative number is a number below the minimum, not a malformed range
+    with pytest.raises(ValueError, match=r"^--k: expected integers >= 1, got -3$"):
+        core.parse_ints("k", "2,-3")
     with pytest.raises(ValueError, match=r"^--cameras: expected integers >= 2, got 1$"):
         core.parse_ints("cameras", "1,3,5", minimum=2)
     assert core.parse_ints("cameras", "2", minimum=2) == [2]
@@ -110,6 +114,11 @@ def test_bounds_of_the_shared_checks():
     assert most == 99 and core.check_objects("objects", 99, 0.1) == 99
     with pytest.raises(ValueError, match="expected at most 99"):
         core.check_objects("objects", 100, 0.1)
+    # the room is a 720-gon, a little smaller than the unit disc: 16 discs of radius 1/4 fill
+    # the disc's area exactly, so they do not fit the polygon's
+    assert core.check_objects("objects", 15, 0.25) == 15
+    with pytest.raises(ValueError, match=r"16 discs of radius 0\.25 do not fit .*; expected at most 15$"):
+        core.check_objects("objects", 16, 0.25)
     assert core.check_bounded("dt", 1000.0, 0.0, 1000.0, low_open=True) == 1000.0
     assert core.check_bounded("speed", 0.0, 0.0, 100.0) == 0.0
     for value, low_open in ((0.0, True), (1000.5, False), (-1e-9, False), (np.inf, False), (np.nan, False)):
@@ -127,9 +136,18 @@ def test_bounds_of_the_shared_checks():
         core.check_m(3, [3, 2])
     assert core.check_period(None, 4, ["greedy"]) == 4 and core.check_period(2, 4, ["uniform", "greedy"]) == 2
     assert core.check_period(None, 4, ["uniform"]) is None
+    with pytest.raises(ValueError, match=r"^--update-every: expected an integer >= 1, got 0$"):
+        core.check_period(0, 4, ["greedy"])
     assert core.parse_k("2,4", 4, "the 4 candidates") == [2, 4]
     with pytest.raises(ValueError, match=r"^--k: 5 cameras exceed the 4 candidates$"):
         core.parse_k("2,5", 4, "the 4 candidates")
+
+
+def test_tasker_table_rows_go_up_in_k():
+    recs = [{"tasker": "uniform", "k": k, "residual": 1.0 / k} for k in (16, 2, 8)]
+    rows = core.tasker_table(recs, "T:").splitlines()[2:]
+    assert [int(row.split()[0]) for row in rows] == [2, 8, 16]
+    assert [float(row.split()[1]) for row in rows] == [0.5, 0.125, 0.0625]
 
 
 def test_tasker_table_is_k_by_tasker():
