@@ -12,6 +12,7 @@ from testbed.commands import study as study_command
 from testbed.studies import cameras, lab, moving, static, tracking
 
 STUDIES = ("cameras", "static", "moving", "lab", "tracking")
+STUDY_MODULES = {"static": static, "moving": moving}
 
 
 @pytest.fixture(autouse=True)
@@ -359,3 +360,29 @@ def test_tracking_refuses_feedback_where_every_network_is_uniform(capsys):
     assert tracking.parse(parsed("tracking", "--pairs", "uniform:4"))["feedback"] is None
     assert tracking.parse(parsed("tracking", "--pairs", "uniform:4,greedy:3"))["feedback"] == "hull"
     assert tracking.parse(parsed("tracking", "--pairs", "greedy:3", "--feedback", "tracks"))["feedback"] == "tracks"
+
+
+def test_max_subsets_bounds_the_k_of_most_subsets_and_allows_exactly_its_count():
+    """C(16, 8) = 12870 is the most subsets of --k 2,8,12 (C(16, 12) = 1820); C(8, 4) = 70
+    subsets pass --max-subsets 70."""
+    with pytest.raises(ValueError, match=r"C\(16, 8\) = 12870 subsets .* more than --max-subsets 5000$"):
+        static.parse(parsed("static", "--k", "2,8,12", "--taskers", "optimal", "--max-subsets", "5000"))
+    assert static.parse(parsed("static", "--k", "2,12", "--taskers", "optimal", "--max-subsets", "5000"))["k"] == [2, 12]
+    assert static.parse(parsed("static", "--k", "4", "--candidates", "8", "--taskers", "optimal",
+                               "--max-subsets", "70"))["max_subsets"] == 70
+    with pytest.raises(ValueError, match=r"C\(8, 4\) = 70 subsets .* more than --max-subsets 69$"):
+        static.parse(parsed("static", "--k", "4", "--candidates", "8", "--taskers", "optimal", "--max-subsets", "69"))
+
+
+@pytest.mark.parametrize("name", ["static", "moving"])
+def test_candidates_are_at_least_two(name):
+    with pytest.raises(ValueError, match=r"^--candidates: expected an integer >= 2, got 1$"):
+        STUDY_MODULES[name].parse(parsed(name, "--candidates", "1", "--k", "1"))
+    assert STUDY_MODULES[name].parse(parsed(name, "--candidates", "2", "--k", "1,2"))["candidates"] == 2
+
+
+def test_moving_needs_two_steps():
+    """Frame 0 is the uniform set's; the residual averages frames 1..steps-1, none with one step."""
+    with pytest.raises(ValueError, match=r"^--steps: expected an integer >= 2, got 1$"):
+        moving.parse(parsed("moving", "--steps", "1"))
+    assert moving.parse(parsed("moving", "--steps", "2"))["steps"] == 2

@@ -3,6 +3,7 @@ figure's artists (not its pixels)."""
 
 import re
 
+import numpy as np
 import pytest
 
 from testbed.studies import cameras
@@ -153,3 +154,19 @@ def test_static_and_lab_figures_draw_each_tasker_and_the_all_camera_reference(dr
     assert greedy.lines[0].get_xdata().tolist() == [2, 4] and greedy.lines[0].get_ydata().tolist() == [1.5, 0.75]
     (reference,) = [line for line in fig13.get_lines() if line.get_label() == "all 16 cameras"]
     assert reference.get_linestyle() == "--" and set(reference.get_ydata()) == {1.25}
+
+
+def test_the_excess_panel_leaves_off_what_has_no_excess_and_guides_with_n_to_the_minus_2(drawn):
+    """A residual at the limit (excess 0) has no place on the log axis: its N is left off. The
+    guide falls as N^-2 from the first object count's largest excess at the smallest N."""
+    result = cameras_result(objects=(2, 3), ns=(2, 4, 8))
+    for r in result["records"]:
+        if r["objects"] == 3 and r["cameras"] == 8:
+            r["excess"] = 0.0
+    cameras.plot(result, "unused.png")
+    fig, = drawn
+    lines = {line.get_label(): line for line in fig.axes[2].get_lines()}
+    assert lines["2"].get_xdata().tolist() == [2, 4, 8] and lines["3"].get_xdata().tolist() == [2, 4]
+    guide = lines["N^-2"]
+    assert guide.get_xdata().tolist() == [2, 8]
+    np.testing.assert_allclose(guide.get_ydata(), [2 * 2 / 2**2, 2 * 2 / 2**2 / 16])

@@ -280,9 +280,10 @@ def test_cameras_trials_are_the_documented_drops_and_hulls():
 def test_cameras_exact_limit_column_is_in_object_areas():
     from testbed.studies.limit import limit_residual
 
-    out = cameras.run_trials(3, 0, 1, [4], None, 0.1, 0.004, 2)
-    centers = random_drop(core.circle_room(), np.full(3, 0.1), doc_rng(2, 0, 3, 0))
+    out = cameras.run_trials(5, 0, 1, [4], None, 0.1, 0.004, 2)
+    centers = random_drop(core.circle_room(), np.full(5, 0.1), doc_rng(2, 0, 5, 0))
     raw, pruned = limit_residual(centers, 0.1, h=0.004, min_area=OBJ)
+    assert raw > pruned > 0                                   # this drop has a piece to prune
     np.testing.assert_allclose(out[0, -1], [raw / OBJ, pruned / OBJ], rtol=1e-12)
     # a 400-camera hull contains the limit hull and is close to it
     assert out[0, -1, 0] <= pruned_residual(*core.circle_cameras(400), centers)[0] + 0.01
@@ -316,7 +317,14 @@ def test_static_records_per_tasker_and_k(monkeypatch):
     monkeypatch.setattr(static, "run_trials", run_trials)
     opts = {"objects": 2, "k": [2, 3, 5], "candidates": 8, "taskers": ["greedy", "uniform"], "radius": 0.1,
             "max_subsets": None}
-    recs = static.run(opts, 12, 0, in_process)["records"]     # two tasks: 10 + 2 trials
+    weights = []
+
+    def runner(func, tasks, w, desc):
+        weights.extend(w)
+        return [func(*t) for t in tasks]
+
+    recs = static.run(opts, 12, 0, runner)["records"]
+    assert weights == [10, 2]                                  # ten trials a task
     assert [(r["tasker"], r["k"]) for r in recs] == [("greedy", 2), ("greedy", 3), ("greedy", 5),
                                                      ("uniform", 2), ("uniform", 3), ("uniform", 5)]
     assert [r["residual"] for r in recs] == pytest.approx([5.5, 105.5, 205.5, 15.5, 115.5, 215.5])
@@ -325,24 +333,45 @@ def test_static_records_per_tasker_and_k(monkeypatch):
 
 
 def test_static_trials_are_the_documented_drops_and_taskers():
-    opts = {"objects": 3, "k": [2, 4], "candidates": 8, "taskers": ["uniform", "greedy", "optimal"],
+    """Trial t drops from SeedSequence(seed, spawn_key=(1, 0, t)); a tasker's own draws
+    (clustering's k-means) are keyed by the tasker (its place in tasking's TASKERS), k and t."""
+    opts = {"objects": 3, "k": [2, 4], "candidates": 8, "taskers": ["uniform", "greedy", "optimal", "clustering"],
             "radius": 0.1, "max_subsets": 100}
     out = static.run_trials(1, 3, opts, 4)
-    assert out.shape == (2, 3, 2)
+    assert out.shape == (2, 4, 2)
     xy, yaw = core.circle_cameras(8)
     room = core.circle_room()
     for row, t in zip(out, (1, 2)):
         centers = random_drop(room, np.full(3, 0.1), doc_rng(4, 1, 0, t))
         for i, tasker in enumerate(opts["taskers"]):
             for j, k in enumerate(opts["k"]):
-                S = choose_cameras(tasker, k, xy, yaw, np.pi, centers, 0.1, room)
+                rng = doc_rng(4, 1, 1 + core.TASKERS.index(tasker), k, t)
+                S = choose_cameras(tasker, k, xy, yaw, np.pi, centers, 0.1, room, rng=rng)
                 assert row[i, j] == pytest.approx(pruned_residual(xy[S], yaw[S], centers)[1], abs=1e-12)
     # optimal is the best raw hull: on these drops its pruned residual is no worse either
     assert np.all(out[:, 2] <= out[:, 0] + 1e-9)
     # --max-subsets reaches optimal: C(8, 4) = 70 subsets pass a limit of 70, not 69
-    assert static.run_trials(1, 2, {**opts, "max_subsets": 70}, 4).shape == (1, 3, 2)
+    assert static.run_trials(1, 2, {**opts, "max_subsets": 70}, 4).shape == (1, 4, 2)
     with pytest.raises(ValueError):
         static.run_trials(1, 2, {**opts, "max_subsets": 69}, 4)
+
+
+def test_static_clustering_draws_from_its_own_key():
+    """Clustering's k-means draws from SeedSequence(seed, spawn_key=(1, 1 + its place in
+    tasking's TASKERS, k, t)); on drop 19 (seed 0) other draws choose other cameras."""
+    opts = {"objects": 5, "k": [4, 6], "candidates": 16, "taskers": ["clustering"], "radius": 0.1,
+            "max_subsets": None}
+    out = static.run_trials(19, 20, opts, 0)
+    xy, yaw = core.circle_cameras(16)
+    room = core.circle_room()
+    centers = random_drop(room, np.full(5, 0.1), doc_rng(0, 1, 0, 19))
+    chosen = {tuple(choose_cameras("clustering", 4, xy, yaw, np.pi, centers, 0.1, room,
+                                   rng=np.random.default_rng(s)).tolist()) for s in range(4)}
+    assert len(chosen) > 1                                    # the draw matters here
+    for j, k in enumerate(opts["k"]):
+        rng = doc_rng(0, 1, 1 + core.TASKERS.index("clustering"), k, 19)
+        S = choose_cameras("clustering", k, xy, yaw, np.pi, centers, 0.1, room, rng=rng)
+        assert out[0, 0, j] == pytest.approx(pruned_residual(xy[S], yaw[S], centers)[1], abs=1e-12)
 
 
 def test_static_table_text():
@@ -370,7 +399,14 @@ def test_moving_settings_and_records(monkeypatch):
         return np.arange(a, b, dtype=float)[:, None] + 10 * np.arange(len(sets))[None, :]
 
     monkeypatch.setattr(moving, "run_trials", run_trials)
-    recs = moving.run(opts, 5, 0, in_process)["records"]            # tasks of 2, 2 and 1 trials
+    weights = []
+
+    def runner(func, tasks, w, desc):
+        weights.extend(w)
+        return [func(*t) for t in tasks]
+
+    recs = moving.run(opts, 5, 0, runner)["records"]
+    assert weights == [2, 2, 1]                                     # two trials a task
     assert [(r["tasker"], r["k"], r["update_every"]) for r in recs] == sets
     assert [r["residual"] for r in recs] == pytest.approx([2 + 10 * s for s in range(len(sets))])
     assert recs[3]["residual_sem"] == pytest.approx(np.std(np.arange(5), ddof=1) / np.sqrt(5))
