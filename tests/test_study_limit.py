@@ -102,3 +102,20 @@ def test_three_discs_around_a_point_leave_a_piece_between_them_that_is_pruned():
     assert raw <= hull.area - 3 * OBJ + 1e-9 and pruned <= kept + 1e-9
     assert hull.area - 3 * OBJ - raw < 0.01 * OBJ and kept - pruned < 0.01 * OBJ
     assert raw - pruned > centre.area - 0.01 * OBJ         # the centre piece went with the pruning
+
+
+def test_pruning_threshold_defaults_to_the_smallest_discs_area():
+    """The three discs' centre piece (about 0.1 areas of a 0.1 m disc) is larger than a 0.02 m
+    disc: with one such disc far away the default threshold keeps it, a 0.1 m disc's drops it."""
+    c = np.vstack([0.15 * np.array([[1.0, 0.0], [-0.5, 0.75**0.5], [-0.5, -0.75**0.5]]), [[-0.7, 0.0]]])
+    r = np.array([0.1, 0.1, 0.1, 0.02])
+    default = limit_residual(c, r, h=0.002)
+    assert default == limit_residual(c, r, h=0.002, min_area=np.pi * 0.02**2)
+    big = limit_residual(c, r, h=0.002, min_area=OBJ)
+    assert big[0] == default[0] and big[1] < default[1] - 0.05 * OBJ
+
+
+def test_a_point_inside_a_lone_disc_is_covered():
+    # one disc: no pair of arcs covers the directions, only being inside it does
+    got = covered(np.array([[0.07, 0.0], [0.0, 0.099], [0.0, 0.101], [0.5, 0.5]]), np.zeros((1, 2)), np.array([0.1]))
+    assert got.tolist() == [True, True, False, False]
