@@ -254,7 +254,7 @@ def check_scheduler(address: str, timeout: float) -> None:
                          f"{', '.join(s + '://' for s in NETWORK_SCHEMES)})")
     try:
         port = (_host_port(address) or (None, None))[1]
-    except ValueError as exc:                   # no port, or not a number: Dask's own words
+    except ValueError as exc:                   # no port, or not a number
         raise ValueError(f"scheduler: cannot use the address {address} ({exc})") from None
     if port is not None and not 0 < port < 65536:   # Dask's resolver takes it modulo 65536: another port
         raise ValueError(f"scheduler: cannot use the address {address} (port {port} is not in 1..65535)")
@@ -287,11 +287,19 @@ def check_scheduler(address: str, timeout: float) -> None:
 
 def _host_port(address: str) -> tuple[str, int] | None:
     """(host, port) of a TCP-based Dask ``address`` (tcp, tls, ws, wss), else None; a
-    ValueError in Dask's words when the port is missing or not a number."""
+    ValueError in Dask's words when the port is missing, "port 'x' is not a number" when
+    it is not one (Python's words were "invalid literal for int() with base 10: 'x'")."""
     from distributed.comm.addressing import parse_address, parse_host_port
 
     scheme, location = parse_address(address)
-    return parse_host_port(location) if scheme in NETWORK_SCHEMES else None
+    if scheme not in NETWORK_SCHEMES:
+        return None
+    try:
+        return parse_host_port(location)
+    except ValueError as exc:
+        if not str(exc).startswith("invalid literal for int()"):
+            raise                               # "missing port number in address ...", "invalid address ..."
+        raise ValueError(f"port {location.rpartition(':')[2]!r} is not a number") from None
 
 
 def _why_unreachable(address: str, timeout: float = 1.0) -> str | None:

@@ -245,3 +245,14 @@ def test_ctrl_c_while_the_local_cluster_closes_lets_it_close(monkeypatch):
     with pytest.raises(KeyboardInterrupt), open_client(2):
         raise KeyboardInterrupt                          # the first one
     assert events == ["started", "client closed", "cluster closed"]
+
+
+def test_a_port_that_is_not_a_number_says_so():
+    """Python's own words for it were "invalid literal for int() with base 10: 'abc'"."""
+    from testbed.parallel import check_scheduler
+
+    for address, port in [("tcp://127.0.0.1:abc", "abc"), ("tcp://127.0.0.1:8786/", "8786/"),
+                          ("tls://[::1]:x1", "x1"), ("tcp://127.0.0.1:", "")]:
+        with pytest.raises(ValueError) as info:
+            check_scheduler(address, 1.0)
+        assert str(info.value) == f"scheduler: cannot use the address {address} (port {port!r} is not a number)"
