@@ -256,3 +256,262 @@ def test_a_port_that_is_not_a_number_says_so():
         with pytest.raises(ValueError) as info:
             check_scheduler(address, 1.0)
         assert str(info.value) == f"scheduler: cannot use the address {address} (port {port!r} is not a number)"
+
+
+def test_dask_setup_makes_a_worker_ignore_sigint(monkeypatch):
+    import signal
+
+    from testbed import parallel
+
+    calls = []
+    monkeypatch.setattr(signal, "signal", lambda *args: calls.append(args))
+    parallel.dask_setup(None)
+    assert calls == [(signal.SIGINT, signal.SIG_IGN)]
+
+
+def test_children_ignore_ctrl_c_leaves_another_thread_and_an_already_blocked_sigint_alone():
+    """Only the main thread blocks SIGINT (only it gets Ctrl-C); one that was blocked before
+    stays blocked."""
+    import signal
+    import threading
+
+    from testbed.parallel import children_ignore_ctrl_c
+
+    def blocked():
+        return signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+    seen = []
+
+    def other_thread():
+        with children_ignore_ctrl_c():
+            seen.append(blocked())
+        seen.append(blocked())
+
+    thread = threading.Thread(target=other_thread)
+    thread.start()
+    thread.join()
+    assert seen == [False, False]
+    with children_ignore_ctrl_c():
+        assert blocked()
+    assert not blocked()
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        with children_ignore_ctrl_c():
+            assert blocked()
+        assert blocked()
+    finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def test_chunk_and_default_workers():
+    import os
+
+    from testbed.parallel import chunk, default_workers
+
+    assert chunk(0, 3) == []
+    assert chunk(6, 3) == [(0, 3), (3, 6)]
+    assert chunk(7, 3) == [(0, 3), (3, 6), (6, 7)]
+    assert chunk(3, 0) == [(0, 1), (1, 2), (2, 3)]           # a size below 1 counts as 1
+    assert chunk(3, 2.9) == [(0, 2), (2, 3)]
+    assert default_workers() == len(os.sched_getaffinity(0))
+
+
+def _no_cluster(monkeypatch):
+    import distributed
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("no cluster was to be started")
+
+    monkeypatch.setattr(distributed, "LocalCluster", refuse)
+    monkeypatch.setattr(distributed, "Client", refuse)
+
+
+def test_a_negative_worker_count_is_refused_unless_a_scheduler_is_given(monkeypatch):
+    _no_cluster(monkeypatch)
+    with pytest.raises(ValueError) as info, open_client(-1):
+        pass
+    assert str(info.value) == "workers: expected an integer >= 0, got -1"
+    with open_client(0) as client:                  # 0: this process
+        assert client is None
+    with pytest.raises(ValueError) as info, open_client(-1, scheduler="tcp://127.0.0.1:0"):
+        pass                                        # workers are ignored: the address is checked
+    assert "port 0 is not in 1..65535" in str(info.value)
+
+
+def test_a_client_that_cannot_connect_after_the_check_is_one_line(monkeypatch):
+    import distributed
+
+    from testbed import parallel
+
+    checked = []
+    monkeypatch.setattr(parallel, "check_scheduler", lambda address, timeout: checked.append((address, timeout)))
+    for exc, why in [(OSError("Timed out trying to connect to tcp://10.0.0.5:8786 after 2 s\nmore"),
+                      "Timed out trying to connect to tcp://10.0.0.5:8786 after 2 s"),
+                     (TimeoutError(), "TimeoutError")]:
+        def client(address, timeout, exc=exc):
+            assert (address, timeout) == ("tcp://10.0.0.5:8786", "2.0s")
+            raise exc
+
+        monkeypatch.setattr(distributed, "Client", client)
+        with pytest.raises(ValueError) as info, open_client(scheduler="10.0.0.5:8786", connect_timeout=2.0):
+            pass
+        assert str(info.value) == f"scheduler: cannot reach a Dask scheduler at tcp://10.0.0.5:8786 ({why})"
+    assert checked == [("tcp://10.0.0.5:8786", 2.0)] * 2
+
+
+def test_a_scheduler_client_silences_dask_logs_while_open_and_is_closed(monkeypatch):
+    import logging
+
+    import distributed
+
+    from testbed import parallel
+
+    events = []
+
+    class Client:
+        def __init__(self, address, timeout):
+            events.append(address)
+
+        def close(self):
+            events.append("closed")
+
+    monkeypatch.setattr(parallel, "check_scheduler", lambda address, timeout: None)
+    monkeypatch.setattr(distributed, "Client", Client)
+    loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client")]
+    before = [log.level for log in loggers]
+    monkeypatch.setattr(loggers[1], "level", logging.DEBUG)
+    with pytest.raises(RuntimeError), open_client(scheduler="tls://h:1") as client:
+        assert isinstance(client, Client)
+        assert [log.level for log in loggers] == [logging.CRITICAL] * 2
+        raise RuntimeError
+    assert events == ["tls://h:1", "closed"]
+    assert [log.level for log in loggers] == [before[0], logging.DEBUG]
+
+
+def _fake_cluster(monkeypatch, events, *, fail_cluster=False, fail_client=False):
+    import distributed
+
+    from testbed import parallel
+
+    class Cluster:
+        def __init__(self, **kwargs):
+            if fail_cluster:
+                raise RuntimeError("cluster")
+            events.append(("cluster", kwargs["n_workers"]))
+
+        def close(self):
+            events.append("cluster closed")
+
+    class Client:
+        def __init__(self, cluster):
+            if fail_client:
+                raise RuntimeError("client")
+
+        def close(self):
+            events.append("client closed")
+
+    monkeypatch.setattr(distributed, "LocalCluster", Cluster)
+    monkeypatch.setattr(distributed, "Client", Client)
+    monkeypatch.setattr(parallel, "stop_workers", lambda cluster: events.append("workers stopped"))
+    monkeypatch.setattr(parallel, "default_workers", lambda: 3)
+
+
+def test_a_local_cluster_that_fails_to_start_closes_what_did_start(monkeypatch):
+    import signal
+
+    events = []
+    _fake_cluster(monkeypatch, events, fail_cluster=True)
+    with pytest.raises(RuntimeError, match="cluster"), open_client(2):
+        pass
+    assert events == []                                 # nothing to close
+    assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    _fake_cluster(monkeypatch, events, fail_client=True)
+    with pytest.raises(RuntimeError, match="client"), open_client(2):
+        pass
+    assert events == [("cluster", 2), "workers stopped", "cluster closed"]
+
+
+def test_a_local_cluster_stops_its_workers_only_when_the_run_stops(monkeypatch):
+    events = []
+    _fake_cluster(monkeypatch, events)
+    with open_client() as client:                   # None: the number of cores
+        assert client is not None
+    assert events == [("cluster", 3), "client closed", "cluster closed"]
+    events.clear()
+    with pytest.raises(KeyboardInterrupt), open_client(1):
+        raise KeyboardInterrupt
+    assert events == [("cluster", 1), "client closed", "workers stopped", "cluster closed"]
+
+
+def test_an_address_dask_cannot_connect_to_says_why_without_a_wait():
+    """A tls:// address with no TLS settings in the Dask config: nothing is sent."""
+    from testbed.parallel import check_scheduler
+
+    with pytest.raises(ValueError) as info:
+        check_scheduler("tls://127.0.0.1:8786", 5.0)
+    assert str(info.value).startswith("scheduler: cannot use the address tls://127.0.0.1:8786 (TLS expects "
+                                      "a `ssl_context` argument")
+    assert "\n" not in str(info.value)
+
+
+class _Comm:
+    """A Dask comm that answers ``reply`` to an identity request."""
+
+    def __init__(self, reply, log):
+        self.reply, self.log = reply, log
+
+    async def write(self, msg):
+        self.log.append(msg)
+
+    async def read(self):
+        return self.reply
+
+    def abort(self):
+        self.log.append("aborted")
+
+
+@pytest.mark.parametrize(("reply", "why"), [
+    ({"type": "Worker", "id": "w"}, "it answered \"{'type': 'Worker', 'id': 'w'}\""),
+    ("x" * 100, "it answered " + repr("x" * 60)),
+    ([1, 2], "it answered '[1, 2]'"),
+    (None, None),                                # Dask's connect raised without a message
+    ({"type": "Scheduler", "id": "s"}, ""),
+])
+def test_what_a_server_answers_decides_if_it_is_a_dask_scheduler(monkeypatch, reply, why):
+    import distributed.comm
+
+    from testbed.parallel import check_scheduler
+
+    log, seen = [], []
+
+    async def connect(address, timeout, **kwargs):
+        seen.append((address, timeout))
+        if reply is None:
+            raise TypeError
+        return _Comm(reply, log)
+
+    monkeypatch.setattr(distributed.comm, "connect", connect)
+    address = "tcp://127.0.0.1:8786"
+    if why == "":
+        check_scheduler(address, 2.5)
+    else:
+        with pytest.raises(ValueError) as info:
+            check_scheduler(address, 2.5)
+        assert str(info.value) == (f"scheduler: cannot use the address {address} (TypeError)" if why is None
+                                   else f"scheduler: {address} is not a Dask scheduler ({why})")
+    assert seen == [(address, 2.5)]
+    assert log == ([] if reply is None else [{"op": "identity", "reply": True}, "aborted"])
+
+
+def test_only_tcp_based_addresses_are_tried_with_a_socket():
+    from distributed.comm.inproc import new_address
+
+    from testbed.parallel import _host_port, _why_unreachable, check_scheduler
+
+    assert _host_port("tcp://10.0.0.5:8786") == ("10.0.0.5", 8786)
+    assert _host_port("wss://[::1]:443") == ("::1", 443)
+    address = new_address()                         # of this process, nothing listens there
+    assert _host_port(address) is None and _why_unreachable(address) is None
+    with pytest.raises(ValueError) as info:
+        check_scheduler(address, 0.25)
+    assert str(info.value) == f"scheduler: cannot reach a Dask scheduler at {address} (no answer within 0.25 s)"
