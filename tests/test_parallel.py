@@ -24,6 +24,7 @@ def test_workers_keep_glibc_malloc_defaults_and_one_opencv_thread():
     # Dask's nanny would set MALLOC_TRIM_THRESHOLD_, which makes numpy temporaries slow
     with open_client(1) as client:
         envs = list(client.run(_env).values())
+        assert list(client.nthreads().values()) == [1]                   # one thread per worker
     assert envs == [{"MALLOC_TRIM_THRESHOLD_": None, "OMP_NUM_THREADS": "1", "LP_NUM_THREADS": "1",
                      "OPENCV_FOR_THREADS_NUM": "1", "cv2_threads": 1}]     # one OpenCV thread too
 
@@ -256,6 +257,9 @@ def test_a_port_that_is_not_a_number_says_so():
         with pytest.raises(ValueError) as info:
             check_scheduler(address, 1.0)
         assert str(info.value) == f"scheduler: cannot use the address {address} (port {port!r} is not a number)"
+    with pytest.raises(ValueError) as info:         # no port at all: Dask's words
+        check_scheduler("tcp://127.0.0.1", 1.0)
+    assert str(info.value) == "scheduler: cannot use the address tcp://127.0.0.1 (missing port number in address '127.0.0.1')"
 
 
 def test_dask_setup_makes_a_worker_ignore_sigint(monkeypatch):
@@ -333,6 +337,9 @@ def test_a_negative_worker_count_is_refused_unless_a_scheduler_is_given(monkeypa
     assert str(info.value) == "workers: expected an integer >= 0, got -1"
     with open_client(0) as client:                  # 0: this process
         assert client is None
+    with pytest.raises(ValueError) as info, open_client(0, scheduler="tcp://127.0.0.1:0"):
+        pass                                        # not this process: the scheduler's cluster
+    assert "port 0 is not in 1..65535" in str(info.value)
     with pytest.raises(ValueError) as info, open_client(-1, scheduler="tcp://127.0.0.1:0"):
         pass                                        # workers are ignored: the address is checked
     assert "port 0 is not in 1..65535" in str(info.value)
@@ -475,6 +482,7 @@ class _Comm:
     ("x" * 100, "it answered " + repr("x" * 60)),
     ([1, 2], "it answered '[1, 2]'"),
     (None, None),                                # Dask's connect raised without a message
+    ({"id": "s"}, "it answered \"{'id': 's'}\""),
     ({"type": "Scheduler", "id": "s"}, ""),
 ])
 def test_what_a_server_answers_decides_if_it_is_a_dask_scheduler(monkeypatch, reply, why):
@@ -491,7 +499,7 @@ def test_what_a_server_answers_decides_if_it_is_a_dask_scheduler(monkeypatch, re
         return _Comm(reply, log)
 
     monkeypatch.setattr(distributed.comm, "connect", connect)
-    address = "tcp://127.0.0.1:8786"
+    address = "tcp://127.0.0.1:65535"                # the highest port there is
     if why == "":
         check_scheduler(address, 2.5)
     else:
@@ -510,8 +518,181 @@ def test_only_tcp_based_addresses_are_tried_with_a_socket():
 
     assert _host_port("tcp://10.0.0.5:8786") == ("10.0.0.5", 8786)
     assert _host_port("wss://[::1]:443") == ("::1", 443)
+    assert _host_port("ucx://10.0.0.5:8786") is None
     address = new_address()                         # of this process, nothing listens there
     assert _host_port(address) is None and _why_unreachable(address) is None
     with pytest.raises(ValueError) as info:
         check_scheduler(address, 0.25)
     assert str(info.value) == f"scheduler: cannot reach a Dask scheduler at {address} (no answer within 0.25 s)"
+
+
+def test_why_unreachable_tries_once_within_its_timeout(monkeypatch):
+    import socket
+
+    from testbed.parallel import _why_unreachable
+
+    calls = []
+
+    def connect(where, timeout):
+        calls.append((where, timeout))
+        raise (TimeoutError("timed out") if where[1] == 1 else ConnectionRefusedError(111, "Connection refused"))
+
+    monkeypatch.setattr(socket, "create_connection", connect)
+    assert _why_unreachable("tcp://10.0.0.5:1", timeout=0.3) is None            # a time-out: no reason
+    assert _why_unreachable("ws://10.0.0.5:2", timeout=0.3) == "Connection refused"
+    assert calls == [(("10.0.0.5", 1), 0.3), (("10.0.0.5", 2), 0.3)]
+
+
+def test_stop_workers_closes_every_worker_with_the_timeout_even_if_one_fails():
+    import asyncio
+
+    from testbed.parallel import stop_workers
+
+    closed = []
+
+    class Worker:
+        def __init__(self, name, fails):
+            self.name, self.fails = name, fails
+
+        async def close(self, timeout, reason):
+            if self.fails:
+                raise RuntimeError("already gone")
+            await asyncio.sleep(0.01)
+            closed.append((self.name, timeout, reason))
+
+    class Cluster:
+        def __init__(self):
+            self.workers = {0: Worker("a", True), 1: Worker("b", False)}
+
+        def sync(self, func):
+            return asyncio.run(func())
+
+    stop_workers(Cluster(), timeout=0.2)
+    assert closed == [("b", 0.2, "run stopped")]
+
+
+def test_wait_for_a_worker_says_so_only_when_there_is_none(capsys):
+    from testbed.parallel import wait_for_a_worker
+
+    class Client:
+        def __init__(self, workers):
+            self.workers, self.waited = workers, []
+
+        def scheduler_info(self):
+            return {"workers": self.workers}
+
+        def wait_for_workers(self, n):
+            self.waited.append(n)
+
+    busy = Client({"tcp://w:1": {}})
+    wait_for_a_worker(busy, "tcp://s:8786")
+    assert busy.waited == [] and capsys.readouterr().err == ""
+    empty = Client({})
+    wait_for_a_worker(empty, "tcp://s:8786")
+    assert empty.waited == [1]
+    assert capsys.readouterr().err == ("warning: --scheduler: no worker has joined tcp://s:8786 yet; "
+                                       "waiting for one (Ctrl-C stops)\n")
+
+
+def test_run_tasks_in_this_process_shows_its_progress_in_weights(capsys):
+    from testbed.parallel import run_tasks
+
+    assert run_tasks(pow, [(2, 3), (3, 2), (2, 0)], progress=False) == [8, 9, 1]
+    assert run_tasks(pow, ((i, 2) for i in range(3)), progress=False) == [0, 1, 4]   # any iterable
+    assert capsys.readouterr().err == ""
+    assert run_tasks(pow, [(2, 3), (3, 2)], desc="pow") == [8, 9]
+    err = capsys.readouterr().err
+    assert "pow: 100%" in err and "| 2/2 [" in err
+    run_tasks(pow, [(2, 3), (3, 2)], weights=[5, 2])
+    assert "| 7/7 [" in capsys.readouterr().err
+    run_tasks(pow, [(2, 3), (3, 2), (1, 1)])
+    assert "| 3/3 [" in capsys.readouterr().err
+    with pytest.raises(ZeroDivisionError) as info:      # held: the bar is closed all the same
+        run_tasks(divmod, [(1, 1), (1, 0)])
+    err = capsys.readouterr().err
+    assert err.endswith("\n") and "| 1/2 [" in err
+    del info
+
+
+class _Future:
+    def __init__(self, key, value, log):
+        self.key, self.value, self.log = key, value, log
+
+    def result(self):
+        if isinstance(self.value, BaseException):
+            raise self.value
+        return self.value
+
+    def cancel(self):
+        self.log.append(("cancel", self.key))
+
+
+class _Client:
+    """submit() computes at once; the futures complete in reverse order (monkeypatched as_completed)."""
+
+    def __init__(self):
+        self.log, self.n = [], 0
+
+    def submit(self, func, *args, pure=True):
+        self.log.append(("submit", args, pure))
+        self.n += 1
+        try:
+            value = func(*args)
+        except Exception as exc:  # noqa: BLE001 - raised by result(), as a Dask future does
+            value = exc
+        return _Future(f"k{self.n}", value, self.log)
+
+
+def test_run_tasks_on_a_client_puts_results_in_task_order_and_cancels_the_futures(monkeypatch, capsys):
+    import distributed
+
+    from testbed.parallel import run_tasks
+
+    monkeypatch.setattr(distributed, "as_completed", lambda futures: reversed(futures))
+    client = _Client()
+    assert run_tasks(pow, [(2, 3), (2, 3), (3, 2)], client=client, weights=[1, 1, 2]) == [8, 8, 9]
+    assert "| 4/4 [" in capsys.readouterr().err
+    assert client.log == [("submit", (2, 3), False), ("submit", (2, 3), False), ("submit", (3, 2), False),
+                          ("cancel", "k1"), ("cancel", "k2"), ("cancel", "k3")]
+    client = _Client()
+    with pytest.raises(ZeroDivisionError):
+        run_tasks(divmod, [(1, 0), (4, 2)], client=client, progress=False)
+    assert [e for e in client.log if e[0] == "cancel"] == [("cancel", "k1"), ("cancel", "k2")]
+
+
+def test_run_tasks_on_a_client_raises_a_ctrl_c_that_a_future_swallowed(monkeypatch):
+    import signal
+
+    import distributed
+
+    from testbed import stops
+    from testbed.parallel import run_tasks
+
+    monkeypatch.setattr(distributed, "as_completed", lambda futures: iter(futures))
+    monkeypatch.setattr(stops, "_came", [signal.SIGINT])
+    client = _Client()
+    with pytest.raises(KeyboardInterrupt):
+        run_tasks(pow, [(2, 3)], client=client, progress=False)
+    assert client.log[-1] == ("cancel", "k1")
+
+
+def test_run_tasks_opens_a_client_from_workers_or_scheduler(monkeypatch):
+    import distributed
+
+    from testbed import parallel
+
+    opened, clients = [], []
+
+    @contextlib.contextmanager
+    def open_client(workers, scheduler):
+        opened.append((workers, scheduler))
+        clients.append(_Client())
+        yield clients[-1]
+
+    monkeypatch.setattr(parallel, "open_client", open_client)
+    monkeypatch.setattr(distributed, "as_completed", lambda futures: reversed(futures))
+    assert parallel.run_tasks(pow, [(2, 3), (3, 2)], workers=2, progress=False) == [8, 9]
+    assert parallel.run_tasks(pow, [(2, 1)], scheduler="tcp://s:1", progress=False) == [2]
+    assert opened == [(2, None), (0, "tcp://s:1")]
+    assert [[e for e in c.log if e[0] == "submit"] for c in clients] == [      # run there, not here
+        [("submit", (2, 3), False), ("submit", (3, 2), False)], [("submit", (2, 1), False)]]
