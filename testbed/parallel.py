@@ -252,6 +252,9 @@ def check_scheduler(address: str, timeout: float) -> None:
     if scheme not in (*NETWORK_SCHEMES, "inproc"):      # inproc: a scheduler of this process (tests)
         raise ValueError(f"scheduler: cannot use the address {address} (protocol {scheme!r}; expected "
                          f"{', '.join(s + '://' for s in NETWORK_SCHEMES)})")
+    if scheme == "inproc" and address.split("://", 1)[1].count("/") != 2:    # Dask: "not enough values to unpack"
+        raise ValueError(f"scheduler: cannot use the address {address} (an inproc address is "
+                         "inproc://HOST/PID/N, a scheduler inside this process)")
     try:
         port = (_host_port(address) or (None, None))[1]
     except ValueError as exc:                   # no port, or not a number

@@ -461,6 +461,18 @@ def test_an_address_dask_cannot_connect_to_says_why_without_a_wait():
     assert "\n" not in str(info.value)
 
 
+
+@pytest.mark.parametrize("address", ["inproc://x", "inproc://"])
+def test_a_malformed_inproc_address_names_the_form_it_takes(address):
+    """Dask's words were "not enough values to unpack (expected 3, got 1)"."""
+    from testbed.parallel import check_scheduler
+
+    with pytest.raises(ValueError) as info:
+        check_scheduler(address, 5.0)
+    assert str(info.value) == (f"scheduler: cannot use the address {address} (an inproc address is "
+                               "inproc://HOST/PID/N, a scheduler inside this process)")
+
+
 class _Comm:
     """A Dask comm that answers ``reply`` to an identity request."""
 
