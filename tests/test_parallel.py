@@ -163,7 +163,8 @@ def test_a_tls_scheduler_set_up_in_the_dask_config_passes_the_check(tmp_path):
         for part, path in (("cert", cert), ("key", key))}
     with dask.config.set(tls), LocalCluster(n_workers=0, processes=False, protocol="tls", dashboard_address=None,
                                             security=Security()) as cluster:
-        check_scheduler(cluster.scheduler_address, 5.0)
+        assert cluster.scheduler_address.startswith("tls://")
+        check_scheduler(cluster.scheduler_address, 5.0)        # raises unless it answered as a scheduler
 
 
 def _sigint_blocked():
