@@ -290,18 +290,25 @@ def test_the_near_field_switch_chooses_where_cameras_carve(lab_episode):
     assert all(a >= b - 1e-9 for a, b in zip(carved_late, plain)) and sum(carved_late) > sum(plain)
 
 
-def test_feedback_tracks_tasks_from_the_trackers_predictions(monkeypatch):
-    """docs/network.md: with --feedback tracks "the tracker's confirmed tracks are the
-    estimates instead" of the hull's polygon centres. No test ran feedback="tracks"."""
+def _estimates_with_tracks_feedback(monkeypatch, frames):
+    """The object estimates given to greedy (k = 8, --feedback tracks) on each frame of a
+    lab walk of ``frames`` frames seen by exact disc scanlines, and the loop's results."""
     from pipeline.rectify import Rectifier
 
     scene = load_scene("lab")
-    truth = walk(scene, 8, np.random.default_rng(5))
+    truth = walk(scene, frames, np.random.default_rng(5))
     bearings = Rectifier.build(scene.cameras).bearings
     source = PrecomputedSource(_disc_scanlines(scene, truth, bearings), bearings)
     given = []
     spy_on_tasker(monkeypatch, lambda a: given.append(np.array(a[5])))
     results = list(run_loop(scene, LoopConfig("greedy", 8, feedback="tracks"), truth, source))
+    return given, results
+
+
+def test_feedback_tracks_tasks_from_the_trackers_predictions(monkeypatch):
+    """docs/network.md: with --feedback tracks "the tracker's confirmed tracks are the
+    estimates instead" of the hull's polygon centres. No test ran feedback="tracks"."""
+    given, results = _estimates_with_tracks_feedback(monkeypatch, 8)
     passed = given[1:]                                     # given[0]: the first frame's uniform set
     assert len(passed) == len(results) - 1
     confirmed = [i for i, r in enumerate(results[:-1]) if len(r.track_ids)]
@@ -709,15 +716,7 @@ def test_incremental_swaps_up_to_m_cameras(lab_episode):
 
 
 def test_feedback_tracks_falls_back_to_the_hull_before_a_track_is_confirmed(monkeypatch):
-    from pipeline.rectify import Rectifier
-
-    scene = load_scene("lab")
-    truth = walk(scene, 4, np.random.default_rng(5))
-    bearings = Rectifier.build(scene.cameras).bearings
-    source = PrecomputedSource(_disc_scanlines(scene, truth, bearings), bearings)
-    given = []
-    spy_on_tasker(monkeypatch, lambda a: given.append(np.array(a[5])))
-    results = list(run_loop(scene, LoopConfig("greedy", 8, feedback="tracks"), truth, source))
+    given, results = _estimates_with_tracks_feedback(monkeypatch, 4)
     unconfirmed = [i for i, r in enumerate(results[:-1]) if not len(r.track_ids)]
     assert unconfirmed
     for i in unconfirmed:

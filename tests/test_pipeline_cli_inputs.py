@@ -165,13 +165,26 @@ def test_scanlines_on_a_dataset_of_several_episodes_asks_for_one(tmp_path, capsy
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ds"]
 
 
+def _assert_sight_range_of(root, npz, height, width):
+    """The (gt_)blind_radius and (gt_)sight_radius in ``npz`` are the render directory's
+    pipeline's sight range for people ``height`` m tall and ``width`` m wide (the true
+    scanlines' far edge depends on the width)."""
+    from pipeline import Pipeline, PipelineParams
+
+    pipe = Pipeline(RenderDir(root).cameras, PipelineParams())
+    with np.load(npz) as z:
+        for prefix, truth in (("", False), ("gt_", True)):
+            near, far = pipe.sight_range(height, truth=truth, object_width=width)
+            np.testing.assert_array_equal(z[f"{prefix}blind_radius"], near)
+            np.testing.assert_array_equal(z[f"{prefix}sight_radius"], far)
+
+
 def test_the_people_size_of_an_episode_where_no_one_walked_is_its_scenes(render_dir, tmp_path, capsys):
     """No row in people.csv: the smallest person the scene in meta.json could have held, not none."""
     import json
 
     import yaml
 
-    from pipeline import Pipeline, PipelineParams
     from scene import scene_path
 
     root = tmp_path / "render"
@@ -183,29 +196,17 @@ def test_the_people_size_of_an_episode_where_no_one_walked_is_its_scenes(render_
     config["people"].update(height=1.5, radius=0.2)
     (root / "meta.json").write_text(json.dumps({"scene_yaml": yaml.safe_dump(config)}))
     assert main_line(capsys, ["scanlines", str(root), "--frames", "1", "--out", str(tmp_path / "b.npz")])[0] == 0
-    pipe = Pipeline(RenderDir(root).cameras, PipelineParams())
-    with np.load(tmp_path / "b.npz") as z:
-        for prefix, truth in (("", False), ("gt_", True)):
-            near, far = pipe.sight_range(1.5, truth=truth, object_width=0.4)
-            np.testing.assert_array_equal(z[f"{prefix}blind_radius"], near)
-            np.testing.assert_array_equal(z[f"{prefix}sight_radius"], far)
+    _assert_sight_range_of(root, tmp_path / "b.npz", height=1.5, width=0.4)
 
 
 def test_the_people_size_is_the_shortest_and_the_thinnest_persons(render_dir, tmp_path, capsys):
     """Two people, one taller and thinner: the height of the one, the diameter of the other."""
-    from pipeline import Pipeline, PipelineParams
-
     root = tmp_path / "render"
     shutil.copytree(render_dir, root)
     (root / "people.csv").write_text("frame,person_id,x,y,radius,height\n0,0,1.0,2.0,0.3,1.5\n"
                                      "0,1,3.0,2.0,0.2,1.9\n")
     assert main_line(capsys, ["scanlines", str(root), "--frames", "1", "--out", str(tmp_path / "s.npz")])[0] == 0
-    pipe = Pipeline(RenderDir(root).cameras, PipelineParams())
-    with np.load(tmp_path / "s.npz") as z:
-        for prefix, truth in (("", False), ("gt_", True)):      # the true scanlines' far edge depends on the width
-            near, far = pipe.sight_range(1.5, truth=truth, object_width=0.4)
-            np.testing.assert_array_equal(z[f"{prefix}blind_radius"], near)
-            np.testing.assert_array_equal(z[f"{prefix}sight_radius"], far)
+    _assert_sight_range_of(root, tmp_path / "s.npz", height=1.5, width=0.4)
 
 
 def test_a_meta_json_without_a_scene_gives_no_people_size(render_dir, tmp_path, capsys):
