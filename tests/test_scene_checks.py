@@ -8,10 +8,12 @@ import pytest
 from scene.checks import (
     check_array,
     check_between,
+    check_choice,
     check_int,
     check_mapping,
     check_positive,
     names,
+    read_input_text,
     readonly,
     shown,
     used_or_refused,
@@ -98,3 +100,39 @@ def test_readonly_copies_and_leaves_the_original_writable():
     r = readonly(a)
     a[0] = 5.0
     assert r[0] == 0.0 and a.flags.writeable and not r.flags.writeable
+
+
+def test_an_empty_choice_is_not_one_of_the_valid_values():
+    assert check_choice("backend", "osmesa", ("egl", "osmesa")) == "osmesa"
+    with pytest.raises(ValueError, match=r"^backend: unknown value None; expected one of egl, osmesa$"):
+        check_choice("backend", None, ("egl", "osmesa"))
+
+
+def test_a_falsy_value_given_where_it_is_not_used_is_still_given():
+    for value in (0, 0.0, ""):
+        with pytest.raises(ValueError, match=r"^--m: unused; why$"):
+            used_or_refused("--m", value, False, "unused", "why")
+
+
+def test_a_file_that_is_not_utf8_names_its_first_bad_byte_and_where_it_is(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_bytes(b"name: caf\xc3\xa9 \xff\n")            # e-acute is UTF-8; 0xff at offset 12 is not
+    with pytest.raises(ValueError) as err:
+        read_input_text("scene file", path)
+    assert str(err.value) == f"scene file: {str(path)!r} is not UTF-8 text (byte 0xff at offset 12)"
+    path.write_bytes(b"name: caf\xc3\xa9\n")
+    assert read_input_text("scene file", path) == "name: caf\u00e9\n"
+
+
+def test_booleans_of_numpy_are_not_numbers_either():
+    for value in (np.array([True, False]), [np.True_, 1.0], np.array([1.0, np.False_], dtype=object)):
+        with pytest.raises(ValueError, match=r"^xy: expected numbers of shape \(2,\), got "):
+            check_array("xy", value, (2,))
+    assert check_array("xy", np.array([3, 4], dtype=np.uint8), (2,)).tolist() == [3.0, 4.0]
+
+
+def test_the_first_unknown_or_missing_key_is_named():
+    with pytest.raises(ValueError, match=r"^room: unknown key 'colour'; expected keys among shape, radius$"):
+        check_mapping("room", {"colour": 1, "shape": "circle", "floor": 2}, ("shape", "radius"))
+    with pytest.raises(ValueError, match=r"^room: missing key 'shape'$"):
+        check_mapping("room", {}, ("shape", "radius", "height"), ("shape", "radius", "height"))
