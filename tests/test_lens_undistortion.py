@@ -166,3 +166,47 @@ def test_every_pixel_of_a_lens_that_folds_beyond_them_gets_its_ray_before_the_fo
     du = (_project(rays + [h, 0], K, dist) - _project(rays - [h, 0], K, dist)) / (2 * h)
     dv = (_project(rays + [0, h], K, dist) - _project(rays - [0, h], K, dist)) / (2 * h)
     assert (du[:, 0] * dv[:, 1] - du[:, 1] * dv[:, 0]).min() > 0
+
+
+@pytest.mark.parametrize("target, want", [
+    ([0.4375 * 0.6, 0.4375 * 0.8], [0.3, 0.4]),             # r = 0.5: 0.5 - 0.5 * 0.5**3 = 0.4375
+    ([0.0, -(0.25 - 0.5 * 0.25**3)], [0.0, -0.25]),
+    ([0.6, 0.0], [np.sqrt(2 / 3), 0.0]),                    # past the top, 0.544 at r**2 = 2/3: its end
+    ([0.0, 0.0], [0.0, 0.0]),
+])
+def test_the_radial_start_inverts_the_radial_factor_on_its_rising_branch(target, want):
+    """k1 = -0.5 alone: r (1 - 0.5 r**2) rises to r = sqrt(2/3) (slope 1 - 1.5 r**2 = 0), then falls."""
+    from scene.camera import _radial_start
+
+    got = _radial_start(np.array([target]), np.array([-0.5, 0.0, 0.0, 0.0, 0.0]))
+    np.testing.assert_allclose(got[0], want, atol=1e-12)
+
+
+def test_the_radial_start_of_a_lens_that_rises_for_ever():
+    """k1 = 0.5, k3 = 0.25: r + 0.5 r**3 + 0.25 r**7 is 1.75 at r = 1 and 2 + 4 + 32 = 38 at r = 2."""
+    from scene.camera import _radial_start
+
+    got = _radial_start(np.array([[0.0, 1.75], [38.0 * 0.6, 38.0 * 0.8]]), np.array([0.5, 0.0, 0.0, 0.0, 0.25]))
+    np.testing.assert_allclose(got, [[0.0, 1.0], [1.2, 1.6]], atol=1e-12)
+
+
+def test_the_polishing_error_is_in_pixels_of_each_axis():
+    """A ray 1e-3 off in x and 2e-3 off in y (normalised) misses by 0.5 px and 1.6 px with fx = 500,
+    fy = 800: 1.66 px, not 2.2e-3."""
+    from scene.camera import _miss
+
+    r, _, err = _miss(np.array([[0.101, 0.202]]), np.array([[0.1, 0.2]]), np.zeros(5), np.array([500.0, 800.0]))
+    np.testing.assert_allclose(r, [[1e-3, 2e-3]], atol=1e-15)
+    assert err[0] == pytest.approx(np.sqrt(0.5**2 + 1.6**2), rel=1e-9)
+
+
+@pytest.mark.parametrize("rd", [0.55, 0.6, 1.5])
+def test_a_pixel_past_a_lens_reach_gets_the_ray_that_lands_nearest_it(rd):
+    """k1 = -0.5 sends no ray farther than 0.544 (normalised) from the centre, at r = sqrt(2/3):
+    a pixel beyond gets that ray, in its own direction (0.6, 0.8), not where Newton's steps stalled."""
+    from scene.camera import undistort_points
+
+    K = np.array([[100.0, 0.0, 50.0], [0.0, 100.0, 50.0], [0.0, 0.0, 1.0]])
+    uv = np.array([[50 + 100 * rd * 0.6, 50 + 100 * rd * 0.8]])
+    ray = undistort_points(uv, K, [-0.5, 0.0, 0.0, 0.0, 0.0])[0]
+    np.testing.assert_allclose(ray, np.sqrt(2 / 3) * np.array([0.6, 0.8]), atol=1e-12)
