@@ -10,7 +10,7 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scene import Camera, Scene, load_scene, rotation_from_yaw_pitch, scene_path
+from scene import Camera, FloorCamera, Scene, load_scene, rotation_from_yaw_pitch, scene_path
 
 
 @pytest.fixture(scope="module")
@@ -580,3 +580,113 @@ def test_a_ring_is_the_studies_cameras_numbered_from_angle_zero():
         np.testing.assert_allclose(xy, want_xy, atol=1e-12)
         np.testing.assert_allclose(np.exp(1j * yaw), np.exp(1j * want_yaw), atol=1e-12)
         np.testing.assert_allclose(fovs, np.radians(fov), rtol=1e-12)
+
+
+# ---- one step past each edge is refused, and what the loader keeps
+@pytest.mark.parametrize("old, new, match", [
+    ("resolution: [64, 48]", "resolution: [2, 16381]",
+     r"^cameras.intrinsics.resolution: expected at most 16380 pixels a side, got 2 x 16381$"),
+    ("resolution: [64, 48]", "resolution: [16381, 2]", r"^cameras.intrinsics.resolution: .*got 16381 x 2$"),
+    ("hfov_deg: 60", "hfov_deg: true", r"^cameras.intrinsics.hfov_deg: expected a field of view in \[1, 179\] degrees, got True$"),
+    ("hfov_deg: 60", "hfov_deg: 179.001", r"^cameras.intrinsics.hfov_deg: .*got 179.001$"),
+    ("hfov_deg: 60", "hfov_deg: 0.999", r"^cameras.intrinsics.hfov_deg: .*got 0.999$"),
+    # u in -64.5..127.5, v in -48.5..95.5 for a 64 x 48 image
+    ("hfov_deg: 60,", "hfov_deg: 60, principal: [127.6, 23.5],", r"^cameras.intrinsics.principal: .*u in -64.5..127.5 and v in -48.5..95.5, got \[127.6, 23.5\]$"),
+    ("hfov_deg: 60,", "hfov_deg: 60, principal: [-64.6, 23.5],", r"^cameras.intrinsics.principal: .*got \[-64.6, 23.5\]$"),
+    ("hfov_deg: 60,", "hfov_deg: 60, principal: [31.5, 95.6],", r"^cameras.intrinsics.principal: .*got \[31.5, 95.6\]$"),
+    ("hfov_deg: 60,", "hfov_deg: 60, principal: [31.5, -48.6],", r"^cameras.intrinsics.principal: .*got \[31.5, -48.6\]$"),
+    ("radius: 0.25}", "radius: 0.25, height: 2.51}", r"^people.height: 2.51 m is above the ceiling \(2.5 m, room.height\)$"),
+    ("people: {count: 2, radius: 0.25}\n", "", r"^scene: missing key 'people'$"),
+])
+def test_one_step_past_an_edge_is_refused(old, new, match):
+    with pytest.raises(ValueError, match=match):
+        Scene.from_text(_edited(SMALL, old, new))
+
+
+def test_edges_of_the_principal_point_and_field_of_view_of_a_small_image_load():
+    for old, new in [("hfov_deg: 60,", "hfov_deg: 60, principal: [127.5, 95.5],"),
+                     ("hfov_deg: 60,", "hfov_deg: 60, principal: [-64.5, -48.5],"),
+                     ("hfov_deg: 60", "hfov_deg: 179"), ("hfov_deg: 60", "hfov_deg: 1")]:
+        Scene.from_text(_edited(SMALL, old, new))
+
+
+@pytest.mark.parametrize("old, new, match", [
+    ("count: 16", "count: 10001", r"^cameras.ring.count: expected at most 10000 cameras, got 10001$"),
+    ("fov_deg: 180", "fov_deg: true", r"^cameras.ring.fov_deg: expected a field of view in \[1e-06, 180\] degrees, got True$"),
+    ("fov_deg: 180", "fov_deg: 9e-7", r"^cameras.ring.fov_deg: .*got 9e-07$"),
+])
+def test_a_ring_one_step_past_its_edges_is_refused(old, new, match):
+    with pytest.raises(ValueError, match=match):
+        Scene.from_text(_edited(CIRCLE, old, new))
+
+
+def test_uniform_sets_are_kept_in_number_order():
+    scene = Scene.from_text(LAB.replace("  6: [1, 3, 7, 11, 13, 15]", "  6: [15, 1, 13, 3, 11, 7]"))
+    assert scene.uniform_sets[6] == (1, 3, 7, 11, 13, 15)
+    assert scene.uniform_indices()[6] == (0, 2, 6, 10, 12, 14)
+
+
+def test_the_default_colours_are_ten_distinct_ones_then_round_again():
+    text = SMALL.replace("width: 4.0, depth: 3.0", "width: 10.0, depth: 10.0").replace("count: 2,", "count: 12,")
+    colours = Scene.from_text(text).people.colours
+    assert len({tuple(c) for c in colours[:10].tolist()}) == 10
+    np.testing.assert_array_equal(colours[10:], [[200, 30, 30], [30, 70, 200]])
+
+
+def test_a_scene_with_a_floor_camera_among_calibrated_ones_is_not_calibrated():
+    small = Scene.from_text(SMALL)
+    mixed = Scene("mixed", small.room, (small.cameras[0], FloorCamera(2, [1.0, 1.0], 0.0, 1.0)), small.people)
+    assert small.is_calibrated and not mixed.is_calibrated
+
+
+# ---- the camera's checks and derived values at their edges, against hand-computed values
+GOOD_K = np.array([[500.0, 0.0, 319.5], [0.0, 500.0, 239.5], [0.0, 0.0, 1.0]])
+
+
+@pytest.mark.parametrize("R", [np.diag([1.0, 1.0, -1.0]), 1.001 * np.eye(3)])    # a mirror; 0.2 % too long
+def test_a_mirror_or_a_stretched_rotation_is_refused(R):
+    with pytest.raises(ValueError, match=r"^camera.R: expected a rotation matrix$"):
+        Camera(1, GOOD_K, np.zeros(5), R, np.zeros(3), 640, 480)
+
+
+def test_a_camera_needs_a_pixel_of_height_and_a_number_from_one():
+    with pytest.raises(ValueError, match=r"^camera.resolution: expected an integer >= 1, got 0$"):
+        Camera(1, GOOD_K, np.zeros(5), np.eye(3), np.zeros(3), 640, 0)
+    with pytest.raises(ValueError, match=r"^camera.number: expected an integer >= 1, got 0$"):
+        Camera(0, GOOD_K, np.zeros(5), np.eye(3), np.zeros(3), 640, 480)
+
+
+def test_a_camera_looking_straight_down_has_a_pitch_of_90_degrees_though_r_rounds_past_one():
+    """Rows right (world -y), down (world -x) and forward (world -z); a rotation read from a
+    file may be a few ulps long (R[2, 2] = -1 - 1e-12, within the rotation check)."""
+    R = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]]) * (1 + 1e-12)
+    cam = Camera(1, GOOD_K, np.zeros(5), R, -R @ [1.0, 2.0, 2.5], 640, 480)
+    assert cam.pitch == pytest.approx(np.pi / 2, abs=1e-6)
+    np.testing.assert_allclose(cam.center_world, [1.0, 2.0, 2.5], atol=1e-9)
+
+
+def test_the_field_of_view_of_an_off_centre_camera_spans_its_image_edges():
+    """From the left edge of pixel 0 (u = -0.5) to the right edge of the last (u = width - 0.5),
+    as the angle between those two rays; fy differs from fx and plays no part."""
+    K = np.array([[500.0, 0.0, 100.0], [0.0, 800.0, 239.5], [0.0, 0.0, 1.0]])
+    cam = Camera(1, K, np.zeros(5), np.eye(3), np.zeros(3), 640, 480)
+    left, right = np.array([-0.5 - 100.0, 0.0, 500.0]), np.array([639.5 - 100.0, 0.0, 500.0])
+    want = np.arccos(left @ right / np.linalg.norm(left) / np.linalg.norm(right))
+    assert cam.hfov == pytest.approx(want, rel=1e-12) and cam.fov == cam.hfov
+    assert np.degrees(cam.hfov) == pytest.approx(np.degrees(np.arctan(100.5 / 500) + np.arctan(539.5 / 500)))
+
+
+def test_camera_names_have_two_digits_at_least():
+    assert Camera(5, GOOD_K, np.zeros(5), np.eye(3), np.zeros(3), 640, 480).name == "cam05"
+    assert Camera(123, GOOD_K, np.zeros(5), np.eye(3), np.zeros(3), 640, 480).name == "cam123"
+    assert FloorCamera(7, [0.0, 0.0], 0.0, 1.0).name == "cam07"
+
+
+def test_a_floor_cameras_field_of_view_is_checked_in_degrees_at_its_edges():
+    assert FloorCamera(1, [0.0, 0.0], 0.0, np.radians(1e-6)).fov == np.radians(1e-6)
+    assert FloorCamera(1, [0.0, 0.0], 0.0, np.pi).fov == np.pi
+    for degrees in (0.9e-6, 180.001, 200.0):
+        with pytest.raises(ValueError, match=rf"^camera.fov: expected a field of view in \[1e-06, 180\] degrees, got {degrees:g}$"):
+            FloorCamera(1, [0.0, 0.0], 0.0, np.radians(degrees))
+    with pytest.raises(ValueError, match=r"^camera.number: expected an integer >= 1, got 0$"):
+        FloorCamera(0, [0.0, 0.0], 0.0, 1.0)
