@@ -1,5 +1,7 @@
 """The top view draws each tasked camera's occluded cone where its scanline says."""
 
+import itertools
+
 import cv2
 import numpy as np
 import pytest
@@ -246,3 +248,122 @@ def test_mosaic_tiles_frames_left_to_right_with_their_scanlines_under_them():
         assert np.any(out[y:y + 20, x:x + 100] != grey[i])   # the label is drawn on the tile
     assert np.all(out[64:, 100:] == 255)                     # no fifth or sixth frame
     assert mosaic(rgb[:3], scans[:3], (1, 5, 9), 300).shape == (64, 300, 3)   # a full row: no empty one under it
+
+
+def test_floor_points_map_to_rounded_pixels_from_the_room_s_own_corner():
+    """A room from (1, 3) to (5, 5.01) m drawn 400 pixels wide with 30-pixel margins: 85
+    pixels a metre (340 / 4 m), the canvas 2.01 * 85 + 60 = 230.85 -> 231 pixels high,
+    (1, 3) at (30, 201), y up; points go to the nearest pixel, not the one below."""
+    from types import SimpleNamespace
+
+    from scene import Room
+
+    room = Room(np.array([[1.0, 3.0], [5.0, 3.0], [5.0, 5.01], [1.0, 5.01]]), 2.5)
+    view = TopView(SimpleNamespace(room=room), width=400, margin=30)
+    assert view.scale == pytest.approx(85.0) and view.height == 231
+    assert view.px([[1.0, 3.0], [5.0, 5.01]]).tolist() == [[30, 201], [370, 30]]
+    # u = 30 + 1.01 * 85 = 115.85, v = 201 - 0.51 * 85 = 157.65
+    assert view.px([2.01, 3.51]).tolist() == [116, 158]
+
+
+def _lab_frame(tasked, scans, truth=((0.0, 0.0),)[:0]):
+    return FrameResult(0, tuple(tasked), np.asarray(scans, bool), [], 0.0, 0.0, 0, (), (),
+                       np.zeros((0, 2)), np.asarray(truth, float).reshape(-1, 2), np.zeros(0, int), np.zeros((0, 2)))
+
+
+def test_a_cone_is_shaded_half_way_to_its_colour_out_to_the_far_walls():
+    """One tasked camera's occluded cone blends the background half way to CONE:
+    (250 + 120) / 2, (250 + 160) / 2, (250 + 230) / 2; the same 5 m from the camera (beyond
+    half the room's length) as 2 m from it."""
+    from testbed.topview import CONE
+
+    scene = load_scene("lab")
+    xy, yaw, fov = scene.floor_poses()
+    view = TopView(scene, width=400)
+    b = yaw[0] + np.linspace(0.45, -0.45, 10) * fov[0]
+    img = view.draw(_lab_frame((1,), np.ones((1, 10))), {n: b for n in range(1, 17)}, title=" ")
+    assert tuple(CONE) == (120, 160, 230)
+    for d in (2.0, 5.0):                                        # camera 1 at (0.78, 0.05) m looks at 47.9 degrees
+        u, v = view.px(xy[0] + d * np.array([np.cos(yaw[0]), np.sin(yaw[0])]))
+        assert tuple(img[v, u]) == (185, 205, 240), d
+
+
+def test_a_cone_wider_than_a_right_angle_follows_its_arc():
+    """A 170-degree run (a wide-angle lens) is shaded as a fan out to its arc: the triangle
+    of its two outer edges alone leaves out the room 3 m in front of the camera."""
+    scene = load_scene("lab")
+    xy, yaw, _ = scene.floor_poses()
+    view = TopView(scene, width=400)
+    b = yaw[0] + np.radians(np.linspace(85.0, -85.0, 20))
+    img = view.draw(_lab_frame((1,), np.ones((1, 20))), {n: b for n in range(1, 17)}, title=" ")
+    u, v = view.px(xy[0] + 3.0 * np.array([np.cos(yaw[0]), np.sin(yaw[0])]))
+    assert tuple(img[v, u]) == (185, 205, 240)
+
+
+def test_field_of_view_edges_are_drawn_at_both_outer_column_edges_and_end_at_the_walls():
+    """Each tasked camera's two outer column edges are drawn as lines (half a column beyond
+    its first and last bearings), inside the room only: outside it the picture is as when
+    no camera is tasked, but for the camera's own mark."""
+    from shapely.geometry import LineString
+
+    scene = load_scene("lab")
+    xy, yaw, fov = scene.floor_poses()
+    view = TopView(scene, width=400)
+    b = yaw[0] + np.linspace(0.45, -0.45, 10) * fov[0]
+    step = b[0] - b[1]
+    bearings = {n: b for n in range(1, 17)}
+    img = view.draw(_lab_frame((1,), np.zeros((1, 10))), bearings, title=" ")
+    untasked = view.draw(_lab_frame((), np.zeros((0, 10))), bearings, title=" ")
+    for a in (b[0] + step / 2, b[-1] - step / 2):
+        ray = np.array([np.cos(a), np.sin(a)])
+        for d in (1.0, 2.0, 3.0):
+            u, v = view.px(xy[0] + d * ray)
+            assert np.any(img[v - 1:v + 2, u - 1:u + 2] != BACKGROUND), (a, d)
+        # where the edge leaves the room, and 0.3 m beyond it (in the margin): background
+        exit_ = np.asarray(LineString([xy[0] + 0.2 * ray, xy[0] + 20 * ray]).intersection(
+            scene.room.polygon.exterior).coords[0])
+        u, v = view.px(exit_ + 0.3 * ray)
+        assert 0 <= u < view.width and 0 <= v < view.height and view.inside[v, u] == 0
+        assert np.all(img[v - 1:v + 2, u - 1:u + 2] == BACKGROUND), a
+    differ = np.any(img != untasked, axis=2) & (view.inside == 0)
+    rr, cc = np.nonzero(differ)
+    u1, v1 = view.px(xy[0])
+    assert np.hypot(cc - u1, rr - v1).max(initial=0) <= 8          # camera 1's mark, drawn larger when tasked
+
+
+def test_people_are_rings_of_their_radius_and_tasked_cameras_larger_red_dots():
+    """A person of the lab's 0.25 m radius is a ring about 12.7 pixels (at 50.7 pixels a
+    metre) round their position, empty inside; a tasked camera a red dot 6 pixels in radius,
+    the others grey dots of 4."""
+    from testbed.topview import CAMERA_ON, TRUTH
+
+    scene = load_scene("lab")
+    xy, _, _ = scene.floor_poses()
+    view = TopView(scene, width=400)
+    assert view.scale == pytest.approx(340 / 6.7056)
+    img = view.draw(_lab_frame((3,), np.zeros((1, 10)), truth=[[3.0, 3.0]]), {n: np.linspace(0.5, -0.5, 10)
+                                                                          for n in range(1, 17)}, title=" ")
+    u, v = view.px([3.0, 3.0])
+    assert tuple(img[v, u + 12]) == TRUTH and tuple(img[v - 12, u]) == TRUTH
+    assert np.all(img[v - 6:v + 7, u - 6:u + 7] == BACKGROUND)
+    u, v = view.px(xy[2])                                       # camera 3, tasked
+    assert all(tuple(img[v + dv, u + du]) == CAMERA_ON for du, dv in ((0, 0), (-5, 0), (5, 0), (0, -5)))
+    u, v = view.px(xy[1])                                       # camera 2, not tasked
+    assert tuple(img[v, u]) == CAMERA_OFF and tuple(img[v, u - 3]) == CAMERA_OFF
+    assert tuple(img[v, u - 6]) != CAMERA_OFF
+
+
+def test_legend_words_end_before_the_next_mark():
+    """Each legend entry's word is written out before the next entry's mark: a clear gap
+    of background just left of every coloured mark but the first."""
+    view = TopView(load_scene("lab"), width=720)
+    img = np.full((view.height, view.width, 3), BACKGROUND, np.uint8)
+    view._legend(img)
+    strip = img[view.height - view.margin:].astype(int)
+    coloured = strip.max(axis=2) - strip.min(axis=2) > 40
+    cols = np.flatnonzero(coloured.any(axis=0))
+    starts = [g[0] for g in np.split(cols, np.flatnonzero(np.diff(cols) > 1) + 1)]
+    assert len(starts) == 5
+    assert all(s2 - s1 > 40 for s1, s2 in itertools.pairwise(starts))     # a word of 4+ letters between marks
+    for s in starts[1:]:
+        assert np.all(strip[:, s - 10:s - 3] == BACKGROUND), s          # (the mark's own soft edge nearer)
