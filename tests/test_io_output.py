@@ -168,3 +168,63 @@ def test_counts_are_ticked_in_whole_numbers_also_for_one_value():
     ticks = [t for t in ax.get_xticks() if lo <= t <= hi]
     plt.close(fig)
     assert ticks and all(t == round(t) for t in ticks)
+
+
+def test_an_output_that_is_a_folder_is_named_a_folder(tmp_path):
+    (tmp_path / "plots").mkdir()
+    with pytest.raises(ValueError, match=r"^--out: .*plots is a folder; expected a file name$"):
+        check_output_file("--out", tmp_path / "plots")
+
+
+def test_an_output_beside_a_datasets_manifest_is_refused(tmp_path):
+    ds = _dataset(tmp_path / "ds", json.dumps({"format_version": 2, "episodes": []}))
+    with pytest.raises(ValueError, match=r"^--out: .*run_info.json is in the dataset .*ds, beside its manifest.json"):
+        check_output_file("--out", ds / "run_info.json")
+    assert check_output_file("--out", tmp_path / "run_info.json") == tmp_path / "run_info.json"
+
+
+def test_an_output_reached_through_a_link_to_an_episode_is_refused(tmp_path):
+    """The episode is found where the path leads, not by the names written in it."""
+    from testbed.output import episode_of
+
+    episode = _dataset(tmp_path / "ds", "{}") / "episode_0000"
+    (tmp_path / "link").symlink_to(episode, target_is_directory=True)
+    assert episode_of(tmp_path / "link" / "x.npz") == episode
+    with pytest.raises(ValueError, match=r"^--out: .*link/x.npz is inside .*episode_0000, an episode of the dataset"):
+        check_output_file("--out", tmp_path / "link" / "x.npz")
+    # and a path that names an episode but leaves it again is not in it
+    assert episode_of(episode / ".." / "x.npz") is None
+
+
+def test_only_folders_named_episode_underscore_beside_a_manifest_file_are_episodes(tmp_path):
+    from testbed.output import episode_of
+
+    ds = _dataset(tmp_path / "ds", "{}")
+    (ds / "episodes").mkdir()
+    assert episode_of(ds / "episodes" / "x.png") is None
+    (tmp_path / "other" / "manifest.json").mkdir(parents=True)       # a folder of that name is no manifest
+    (tmp_path / "other" / "episode_0000").mkdir()
+    assert episode_of(tmp_path / "other" / "episode_0000" / "x.png") is None
+
+
+def test_a_stale_probe_file_of_this_process_is_reused_and_removed(tmp_path):
+    """A killed run can leave its probe file behind; a new process of the same id writes over it."""
+    from testbed.output import PROBE, check_writable
+
+    (tmp_path / f"{PROBE}write-test.{os.getpid()}").write_text("stale")
+    check_writable("--out", tmp_path)
+    assert os.listdir(tmp_path) == []
+
+
+def test_figures_are_saved_at_the_dpi_given(tmp_path):
+    """A 2 x 1 inch figure at 40 dpi is 80 x 40 pixels."""
+    import cv2
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from testbed.output import save_figure
+
+    save_figure(plt.figure(figsize=(2, 1)), tmp_path / "f.png", dpi=40)
+    assert cv2.imread(str(tmp_path / "f.png")).shape[:2] == (40, 80)
