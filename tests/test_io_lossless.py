@@ -233,3 +233,65 @@ def test_a_frame_one_pixel_wide_or_high_is_refused_before_ffmpeg_starts(tmp_path
     assert str(err.value) == (f"cannot write {tmp_path / 'thin.mkv'}: a lossless video needs frames at least "
                               f"2 pixels wide and high; got {w} x {h}")
     assert not (tmp_path / "thin.mkv").exists()
+
+
+def test_a_video_holding_more_frames_than_expected_is_refused_after_them(tmp_path):
+    got = []
+    with pytest.raises(ValueError, match=r"v.mkv' holds 3 frames; expected 2$"):
+        got.extend(read_video(write(tmp_path / "v.mkv", clip(3)), 2))
+    assert len(got) == 3
+
+
+def test_the_frame_rate_is_stored_exactly(tmp_path):
+    """Frames at 7.5 Hz, not rounded to 8: 3 of them last 0.4 s (Matroska's DURATION tag);
+    at 2.4 Hz, 1.25 s."""
+    for fps, duration in ((7.5, b"00:00:00.400000000"), (2.4, b"00:00:01.250000000")):
+        data = write(tmp_path / f"{fps}.mkv", clip(3), fps).read_bytes()
+        assert duration in data, fps
+
+
+def test_a_frame_of_another_shape_is_refused_and_a_second_close_does_nothing(tmp_path):
+    w = VideoWriter(tmp_path / "v.mkv", 41, 30, 7.5)
+    with pytest.raises(ValueError, match=r"^frame: expected shape \(30, 41, 3\), got \(41, 30, 3\)$"):
+        w.write(np.zeros((41, 30, 3), np.uint8))
+    w.write(clip(1)[0])
+    w.close()
+    w.close()
+    assert len(list(read_video(tmp_path / "v.mkv", 1))) == 1
+
+
+def _fake_ffmpeg(tmp_path, monkeypatch, script):
+    fake = tmp_path / "ffmpeg"
+    fake.write_text(f"#!/bin/sh\n{script}\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+    return fake
+
+
+@pytest.mark.parametrize(("frames", "script", "says"), [
+    (1, "cat > /dev/null\nexit 3", "failed after 1 frame (exit status 3: no message)"),
+    (0, "cat > /dev/null\nexit 3", "failed after 0 frames (exit status 3: no message)"),
+    (2, "cat > /dev/null\nkill -9 $$", "failed after 2 frames (killed by signal 9: no message)"),
+])
+def test_a_writer_s_failure_says_its_frames_and_how_ffmpeg_ended(tmp_path, monkeypatch, frames, script, says):
+    _fake_ffmpeg(tmp_path, monkeypatch, script)
+    w = VideoWriter(tmp_path / "v.mkv", 41, 30, 7.5)
+    for f in clip(frames):
+        w.write(f)
+    with pytest.raises(OSError) as err:
+        w.close()
+    assert str(err.value) == f"cannot write {tmp_path / 'v.mkv'}: ffmpeg {says}"
+
+
+def test_an_error_after_one_frame_says_one_frame(tmp_path, monkeypatch):
+    """ffmpeg gives one 2 x 2 frame, then (once it is taken) fails with a message."""
+    path = write(tmp_path / "v.mkv", clip(2))
+    go = tmp_path / "go"
+    _fake_ffmpeg(tmp_path, monkeypatch, f"printf 'P6\\n2 2\\n255\\nabcdefghijkl'\n"
+                                        f"while [ ! -e {go} ]; do sleep 0.01; done\necho 'slice CRC mismatch' >&2\nexit 1")
+    frames = read_video(path)
+    assert next(frames).tobytes() == b"abcdefghijkl"
+    go.touch()
+    with pytest.raises(ValueError) as err:
+        next(frames)
+    assert str(err.value) == f"video: cannot read {str(path)!r} after 1 frame: slice CRC mismatch (truncated or corrupt)"

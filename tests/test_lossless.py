@@ -181,3 +181,46 @@ def test_a_writer_s_error_counts_the_frames_it_took(tmp_path, monkeypatch):
     with pytest.raises(OSError) as err:
         w.close()
     assert str(err.value) == f"cannot write {tmp_path / 'v.mkv'}: ffmpeg failed after 2 frames (exit status 3: no message)"
+
+
+def test_the_same_frames_give_the_same_bytes_without_dates_or_versions(tmp_path):
+    """Written a second apart to other names, the files are identical: the muxer writes
+    neither the date nor its version (``Lavf`` alone, not ``Lavf63.1.102``)."""
+    import re
+    import time
+
+    paths = []
+    for name in ("a.mkv", "b.mkv"):
+        w = VideoWriter(tmp_path / name, 64, 48, 7.5)
+        for f in frames(3):
+            w.write(f)
+        w.close()
+        paths.append(tmp_path / name)
+        time.sleep(1.1)
+    a, b = (p.read_bytes() for p in paths)
+    assert a == b
+    assert b"Lavf" in a and not re.search(rb"Lavf\d", a) and not re.search(rb"Lavc\d", a)
+
+
+def test_an_ffmpeg_that_is_not_executable_is_refused(tmp_path, monkeypatch):
+    """A file that is there but cannot be run is named as IMAGEIO_FFMPEG_EXE's, before any work."""
+    from testbed.lossless import ffmpeg_exe
+
+    fake = tmp_path / "ffmpeg"
+    fake.write_text("#!/bin/sh\nexit 0\n")
+    fake.chmod(0o644)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+    with pytest.raises(OSError, match=r"^ffmpeg: .*ffmpeg' \(IMAGEIO_FFMPEG_EXE\) is not an executable file"):
+        ffmpeg_exe()
+
+
+def test_ffmpeg_s_message_loses_every_context_prefix_and_blank_line():
+    import io
+
+    from testbed.lossless import _message
+
+    log = io.BytesIO(b"\n[matroska,webm @ 0x55d0c4a8b740] [ffv1 @ 0x7f00aa] slice CRC mismatch\nlater\n")
+    assert _message(log) == "slice CRC mismatch"
+    assert _message(io.BytesIO(b"\n  \n")) == "no message"
+    log = io.BytesIO(b"[in#0 @ 0xabc] moov atom not found\n\nError opening input files: Invalid data\n")
+    assert _message(log) == "Error opening input files: Invalid data"
