@@ -38,6 +38,16 @@ def test_position_ids_decode_to_the_cell_of_every_point_of_the_room(room, u, v):
     assert oy + gy * CELL <= y + 1e-9 and y < oy + (gy + 1) * CELL + 1e-9
 
 
+def test_a_grid_is_as_many_whole_cells_as_the_room_spans_despite_rounding():
+    """0.3 m is 12 cells of 2.5 cm, though 0.2 - (-0.1) is 0.30000000000000004 in floating
+    point (and that / 0.025 is 12.000000000000002); 0.31 m needs a 13th cell. A room's
+    grid starts at its corner, x along the grid's width."""
+    assert ground_grid((-0.1, -0.1, 0.2, 0.2)) == ((-0.1, -0.1), 12, 12)
+    assert ground_grid((-0.1, 0.5, 0.21, 0.6)) == ((-0.1, 0.5), 13, 4)
+    # (0.01, 0.51) is cell (4, 0) of that grid, (0.2, 0.59) cell (12, 3): x + 13 y
+    assert position_id([[0.01, 0.51], [0.2, 0.59]], 13, (-0.1, 0.5)).tolist() == [4, 12 + 13 * 3]
+
+
 @pytest.mark.render
 def test_export_wildtrack(tmp_path, capsys, monkeypatch):
     data, out = tmp_path / "data", tmp_path / "wild"
