@@ -2,11 +2,13 @@
 worked by hand, boxes of hand-drawn masks, frames and calibration read back with OpenCV."""
 
 import json
+import os
 import shutil
 from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 
 from scene.camera import Camera
 from testbed.dataset import write_calibration
@@ -127,6 +129,7 @@ def test_undistort_remaps_the_frames_and_the_border_outside_the_lens_is_black_an
     fs = cv2.FileStorage(str(out / "calibrations" / "intrinsic_zero" / "intr_C2.xml"), cv2.FILE_STORAGE_READ)
     assert not fs.getNode("distortion_coefficients").mat().any()
     fs.release()
+    assert json.loads((out / "grid.json").read_text())["undistorted"] is True
 
 
 def test_a_video_episode_exports_as_its_png_twin(tmp_path):
@@ -153,3 +156,90 @@ def test_a_video_episode_exports_as_its_png_twin(tmp_path):
             np.testing.assert_array_equal(cv2.imread(str(b / name)), cv2.imread(str(a / name)))
     assert [annotations(b, f) for f in range(3)] == [annotations(a, f) for f in range(3)]
     assert annotations(b, 2)[0]["views"][1] == box(1, 10, 3, 19, 8)
+
+
+def test_the_multiviewx_layout_names_and_matrices(tmp_path):
+    """MultiviewX's names (4-digit images, 5-digit annotations, intr_/extr_Camera<n>.xml under
+    calibrations/intrinsic) and rvec, tvec as 3 x 1 FileStorage matrices, as the episode's own."""
+    mask = np.zeros((H, W), np.uint8)
+    mask[2:5, 7:9] = 1
+    ep = make_episode(tmp_path / "episode_0000", np.array([[[1.0, 2.0]], [[1.5, 2.0]]]), {(5, 1): mask})
+    out = export_episode(ep, tmp_path / "mvx", layout="multiviewx")
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()) == [
+        "Image_subsets/C2/0000.png", "Image_subsets/C2/0001.png", "Image_subsets/C5/0000.png",
+        "Image_subsets/C5/0001.png", "annotations_positions/00000.json", "annotations_positions/00001.json",
+        "calibrations/extrinsic/extr_Camera2.xml", "calibrations/extrinsic/extr_Camera5.xml",
+        "calibrations/intrinsic/intr_Camera2.xml", "calibrations/intrinsic/intr_Camera5.xml", "grid.json"]
+    assert json.loads((out / "annotations_positions" / "00001.json").read_text()) == [
+        {"personID": 0, "positionID": 60 + 269 * 80, "views": [box(0, *NONE), box(1, 7, 2, 8, 4)]}]
+    for n in (2, 5):
+        fs = cv2.FileStorage(str(ep / "calibration" / f"cam{n:02d}.yaml"), cv2.FILE_STORAGE_READ)
+        want = {k: fs.getNode(k).mat() for k in ("rvec", "tvec")}
+        fs.release()
+        np.testing.assert_array_equal(want["tvec"].ravel(), [-1.0, -2.0, 4.0 + n])
+        fs = cv2.FileStorage(str(out / "calibrations" / "extrinsic" / f"extr_Camera{n}.xml"), cv2.FILE_STORAGE_READ)
+        for k in ("rvec", "tvec"):
+            got = fs.getNode(k).mat()
+            assert got.shape == (3, 1) and got.dtype == np.float64, k
+            np.testing.assert_array_equal(got, want[k].reshape(3, 1))
+        fs.release()
+
+
+def test_unoccluded_boxes_of_persons_8_and_up_come_from_the_high_bits(tmp_path):
+    """Ten people: person 9's silhouette is bit 9 of a 16-bit silhouette image."""
+    mask = np.zeros((H, W), np.uint8)
+    mask[1:3, 1:4] = 1                                 # person 0
+    mask[30:35, 40:50] = 10                            # person 9
+    positions = np.column_stack([np.linspace(1.0, 5.0, 10), np.full(10, 2.0)])[None]
+    ep = make_episode(tmp_path / "episode_0000", positions, {(2, 0): mask}, cameras=(2,))
+    assert cv2.imread(str(ep / "silhouettes" / "cam02" / "000000.png"), cv2.IMREAD_UNCHANGED)[30, 40] == 512
+    for kind in ("visible", "unoccluded"):
+        ann = annotations(export_episode(ep, tmp_path / kind, box=kind), 0)
+        assert [a["views"] for a in ann] == [[box(0, 1, 1, 3, 2)], *[[box(0, *NONE)]] * 8, [box(0, 40, 30, 49, 34)]]
+
+
+def test_an_export_replaces_an_earlier_one_whole_and_leaves_nothing_beside_it(tmp_path, monkeypatch):
+    from testbed import wildtrack
+
+    ep = make_episode(tmp_path / "episode_0000", np.array([[[1.0, 2.0]]]), {})
+    out = export_episode(ep, tmp_path / "wt")
+    (out / "stale.txt").write_text("x")
+    export_episode(ep, out)
+    assert not (out / "stale.txt").exists() and (out / "grid.json").is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["episode_0000", "wt"]
+    real = os.rename
+
+    def rename(src, dst):                              # the new export cannot be moved into place
+        if Path(src).name.startswith(".wt.") and ".replaced-" not in Path(src).name:
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(wildtrack.os, "rename", rename)
+    (out / "mine.txt").write_text("kept")
+    with pytest.raises(OSError, match="No space left"):
+        export_episode(ep, out)
+    assert (out / "mine.txt").read_text() == "kept" and (out / "grid.json").is_file()   # the earlier one, back
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["episode_0000", "wt"]
+
+
+def test_an_unknown_layout_or_box_is_refused_before_any_folder_is_made(tmp_path):
+    ep = make_episode(tmp_path / "episode_0000", np.array([[[1.0, 2.0]]]), {})
+    with pytest.raises(ValueError, match=r"^layout: expected one of wildtrack, multiviewx, got 'mot'$"):
+        export_episode(ep, tmp_path / "new" / "wt", layout="mot")
+    with pytest.raises(ValueError, match=r"^box: expected one of visible, unoccluded, got 'all'$"):
+        export_episode(ep, tmp_path / "new" / "wt", box="all")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["episode_0000"]
+
+
+def test_a_room_centred_on_the_origin_has_its_grid_from_the_corner_of_its_bounds(tmp_path):
+    """The circle scene's room, radius 1 m about the origin: the grid starts at (-1, -1) m,
+    80 x 80 cells; a person at the origin is in cell (40, 40): positionID 40 + 80 * 40."""
+    ep = make_episode(tmp_path / "episode_0000", np.array([[[0.0, 0.0], [-0.99, 0.99]]]), {})
+    meta = json.loads((ep / "meta.json").read_text())
+    circle = (LAB.parent / "circle.yaml").read_text()
+    (ep / "meta.json").write_text(json.dumps(meta | {"scene_yaml": circle}))
+    out = export_episode(ep, tmp_path / "wt")
+    grid = json.loads((out / "grid.json").read_text())
+    assert (grid["origin_m"], grid["grid_width"], grid["grid_height"]) == ([-1.0, -1.0], 80, 80)
+    # (-0.99, 0.99): floor(0.01 / 0.025) = 0, floor(1.99 / 0.025) = 79
+    assert [a["positionID"] for a in annotations(out, 0)] == [40 + 80 * 40, 0 + 80 * 79]
