@@ -504,3 +504,43 @@ def test_lab_table_text():
         "  6 " + " " * 8 + "1.500" + " " * 8 + "1.250",
         "all 16 cameras: 1.062",
     ]
+
+
+def test_lab_trial_runs_each_tasker_and_k_on_the_walks_scanlines(monkeypatch):
+    """run_trial with the rendering and the closed loop replaced by fakes: the walk is drawn from
+    the trial's first spawned generator (docs/studies.md's seeding) and rendered with the second;
+    the reference run tasks all 16 cameras; --m reaches incremental alone, --no-near-field every
+    run; min_full / mean_full are the smallest and the mean all-camera frame area."""
+    from types import SimpleNamespace
+
+    import testbed.loop
+    from scene import load_scene
+    from testbed.episode import walk, with_people
+    from testbed.loop import LoopConfig
+
+    seen, configs = {}, []
+
+    def render(scene, params, truth, rng):
+        seen["truth"], seen["sensor"] = truth, rng.random(3)
+        return np.zeros((len(truth), 16, 4), bool), np.zeros((16, 4)), np.zeros(16), np.ones(16)
+
+    def run_loop(scene, config, truth, source):
+        configs.append(config)
+        assert source.all.shape == (3, 16, 4) and len(truth) == 3
+        frames = [3.0, 1.0, 2.0] if len(configs) == 1 else [config.k + 10 * config.m + i for i in range(3)]
+        return [SimpleNamespace(hull_area=a) for a in frames]
+
+    monkeypatch.setattr(lab, "render_scanlines", render)
+    monkeypatch.setattr(testbed.loop, "run_loop", run_loop)
+    opts = {"scene": "lab", "people": 2, "frames": 3, "taskers": ["uniform", "greedy", "incremental"], "k": [4, 6],
+            "m": 2, "update_every": 3, "params": None, "near_field": False}
+    out = lab.run_trial(1, opts, 7)
+    motion, sensor = doc_rng(7, 5, 1).spawn(2)
+    np.testing.assert_array_equal(seen["truth"], walk(with_people(load_scene("lab"), 2), 3, motion))
+    np.testing.assert_array_equal(seen["sensor"], sensor.random(3))
+    assert configs[0] == LoopConfig("uniform", 16, near_field=False)
+    assert configs[1:] == [LoopConfig(t, k, m, 3, near_field=False)
+                           for t, m in (("uniform", 1), ("greedy", 1), ("incremental", 2)) for k in (4, 6)]
+    assert out == {"areas": {"uniform:4": 15.0, "uniform:6": 17.0, "greedy:4": 15.0, "greedy:6": 17.0,
+                             "incremental:4": 25.0, "incremental:6": 27.0},
+                   "min_full": 1.0, "mean_full": 2.0, "cameras": 16}
