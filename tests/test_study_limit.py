@@ -119,3 +119,43 @@ def test_a_point_inside_a_lone_disc_is_covered():
     # one disc: no pair of arcs covers the directions, only being inside it does
     got = covered(np.array([[0.07, 0.0], [0.0, 0.099], [0.0, 0.101], [0.5, 0.5]]), np.zeros((1, 2)), np.array([0.1]))
     assert got.tolist() == [True, True, False, False]
+
+
+def cluster(centre, d, r, turn=0.0):
+    """Three discs of radius r at distance d from centre, 120 degrees apart, the first at angle turn."""
+    a = turn + np.radians([0.0, 120.0, 240.0])
+    return np.asarray(centre) + d * np.column_stack([np.cos(a), np.sin(a)])
+
+
+@pytest.mark.parametrize("c, r, h", [
+    # rows y = -0.875, -0.625, ..., 0.875: the first 0.125 above the room's bottom, through the discs
+    (cluster([0.0, -0.875], 0.09, 0.06, np.pi / 2), 0.06, 0.25),
+    # a piece's edge on a common tangent 3 degrees from the rows' direction, crossed by the row y = -0.11
+    (np.array([[0.198, 0.002], [-0.094, 0.085], [-0.019, -0.209]]), 0.1, 0.02),
+])
+def test_raw_residual_is_h_times_the_hulls_chords_on_rows_midway_in_strips_of_height_h(c, r, h):
+    """The rows are the midpoints y = (k + 1/2) h of the strips of height h from the room's
+    bottom, each measured exactly: the raw residual is h times the sum of the rows' chords
+    through the hull outside the discs, here measured on a 2000-camera hull (which contains the
+    limit hull and is close to it)."""
+    hull = core.visual_hull_of_discs(*core.circle_cameras(2000), np.pi, c, r, core.circle_room())
+    outside = hull.difference(shapely.union_all([shapely.Point(p).buffer(r, 256) for p in c]))
+    ys = (np.arange(-round(1 / h), round(1 / h)) + 0.5) * h
+    chords = h * sum(outside.intersection(shapely.LineString([(-1, y), (1, y)])).length for y in ys)
+    assert chords > 0.01 * OBJ
+    raw, _ = limit_residual(c, r, h=h)
+    assert chords - 1e-4 < raw <= chords + 1e-9
+
+
+def test_pieces_holding_a_disc_are_never_pruned():
+    """With a threshold above every piece's area only the pieces without a disc go: the three
+    discs' pieces stay, the piece between them (and the slivers) are removed, as measured on a
+    1000-camera hull's pieces that hold a disc."""
+    c = 0.15 * np.array([[1.0, 0.0], [-0.5, 0.75**0.5], [-0.5, -0.75**0.5]])
+    hull = core.visual_hull_of_discs(*core.circle_cameras(1000), np.pi, c, 0.1, core.circle_room())
+    discs = [shapely.Point(p).buffer(0.05) for p in c]
+    with_disc = sum(g.area for g in hull.geoms if any(g.contains(d) for d in discs)) - 3 * OBJ
+    assert with_disc > 0.05 * OBJ
+    raw, pruned = limit_residual(c, 0.1, h=0.002, min_area=1.0)
+    assert pruned <= with_disc + 1e-9 and with_disc - pruned < 0.01 * OBJ
+    assert raw - pruned > 0.05 * OBJ
