@@ -159,3 +159,40 @@ def test_pieces_holding_a_disc_are_never_pruned():
     raw, pruned = limit_residual(c, 0.1, h=0.002, min_area=1.0)
     assert pruned <= with_disc + 1e-9 and with_disc - pruned < 0.01 * OBJ
     assert raw - pruned > 0.05 * OBJ
+
+
+def test_a_piece_around_a_small_disc_keeps_it_though_the_rows_cross_the_disc_inside_the_piece():
+    """A 1 cm disc at the centre of the three discs lies inside their centre piece: every row
+    crosses the piece, then the disc, then the piece again, as one segment, and the piece holds
+    a disc (a segment's flag is any of its intervals', not its last one's). Pruning pieces below
+    one 0.1 m disc's area keeps it, as on a 1000-camera hull."""
+    c = np.vstack([0.15 * np.array([[1.0, 0.0], [-0.5, 0.75**0.5], [-0.5, -0.75**0.5]]), [[0.0, 0.0]]])
+    r = np.array([0.1, 0.1, 0.1, 0.01])
+    hull = core.visual_hull_of_discs(*core.circle_cameras(1000), np.pi, c, r, core.circle_room())
+    discs = [shapely.Point(p).buffer(0.5 * s) for p, s in zip(c, r)]
+    centre = next(g for g in hull.geoms if g.contains(discs[3]))
+    assert not any(centre.contains(d) for d in discs[:3]) and centre.area < OBJ
+    with_disc = sum(g.area for g in hull.geoms if any(g.contains(d) for d in discs)) - 3 * OBJ - np.pi * 0.01**2
+    pruned = limit_residual(c, r, h=0.002, min_area=OBJ)[1]
+    assert pruned <= with_disc + 1e-9 and with_disc - pruned < 0.01 * OBJ
+    assert centre.area - np.pi * 0.01**2 > 0.05 * OBJ
+
+
+@pytest.mark.parametrize("c, h", [
+    # the pieces between the discs are bounded by common tangents that also bound the discs' pieces
+    ([[0.272, -0.154], [0.15, -0.352], [0.383, -0.359]], 0.002),
+    # no disc reaches the row y = -0.445, between the bottom disc's top and the others' bottoms
+    ([[-0.296, -0.548], [-0.177, -0.337], [-0.419, -0.339]], 0.01),
+])
+def test_pruned_limit_keeps_the_pieces_a_many_camera_hull_keeps(c, h):
+    """Three discs 0.134-0.14 m apart: the limit hull has pieces without a disc of 0.1-0.18
+    object areas, pruned; joining one to a disc's piece across rows (sharing a bounding line,
+    or across rows with no disc between them) would keep it. The pruned value is a 2000-camera
+    hull's pieces holding a disc or larger than one, less the discs."""
+    c = np.array(c)
+    hull = core.visual_hull_of_discs(*core.circle_cameras(2000), np.pi, c, 0.1, core.circle_room())
+    discs = [shapely.Point(p).buffer(0.05) for p in c]
+    small = [g.area for g in hull.geoms if g.area < OBJ and not any(g.contains(d) for d in discs)]
+    assert max(small) > 0.09 * OBJ
+    kept = hull.area - sum(small) - 3 * OBJ
+    assert abs(limit_residual(c, 0.1, h=h)[1] - kept) < 0.01 * OBJ     # within the quadrature's error
