@@ -14,8 +14,9 @@ the hull is therefore a union of intervals between the row's crossings with thos
 and circles, each decided exactly by testing its midpoint. Integrating the covered row
 lengths over a fine grid of rows (midpoint rule in y, exact in x) gives the limit area.
 Connected pieces (for pruning the small ones) join segments of adjacent rows bounded by
-the same two curves: between such rows they are one cell. Where the rows' pieces differ
-(a piece's corner, two pieces meeting or parting), the strip is halved, down to a 64th of
+the same two curves, or by one of them and two that cross (or touch, a disc and its
+tangent) between the rows: between such rows they are one cell. Where the rows' pieces differ
+(a piece starting or ending, two pieces meeting or parting), the strip is halved, down to a 64th of
 the row spacing, and joined by x-overlap only there: joining by overlap at the rows
 themselves merged pieces a fraction of a millimetre apart.
 
@@ -134,10 +135,11 @@ def limit_residual(
     if raw == 0.0:
         return raw, raw
     # Connected pieces (union-find over every row's segments, refined rows included):
-    # segments of adjacent rows bounded by the same two curves are one cell of the strip
-    # between them; a strip where the rows differ is halved until they agree, or down
+    # segments of adjacent rows bounded by the same two curves, or turning a corner, are one
+    # cell of the strip between them; a strip where the rows differ is halved until they agree, or down
     # to ``depth`` halvings, where segments that overlap in x are joined.
     segs = [seg for row in rows for seg in row]          # [x0, x1, ids, residual length, total, disc]
+    curves = _Curves(centers, radii, lines, room_radius)
     parent = list(range(len(segs)))
 
     def find(a):
@@ -155,7 +157,7 @@ def limit_residual(
     for level in range(depth + 1):
         pending = []
         for ya, yb, A, B in strips:
-            if _same_cells(segs, A, B):
+            if _same_cells(segs, A, B, ya, yb, curves):
                 for a, b in zip(A, B):
                     union(a, b)
             elif level == depth or not A or not B:
@@ -186,20 +188,91 @@ def limit_residual(
     return raw, raw - removed
 
 
-def _same_cells(segs: list, A: list[int], B: list[int]) -> bool:
-    """Whether two rows' segments, in x order, pair off one by one as one cell each: the
-    same number, each overlapping in x its partner alone, and sharing a bounding curve
-    with it (a corner where one side changes curve: not a piece ending and another
-    beginning)."""
+def _same_cells(segs: list, A: list[int], B: list[int], ya: float, yb: float, curves: _Curves) -> bool:
+    """Whether two rows' segments (rows ``ya`` and ``yb``), in x order, pair off one by one
+    as one cell each: the same number, each overlapping in x its partner alone, and bounded
+    by the same two curves, or at a corner of one piece: one side's curve the same, the
+    other side's two curves crossing each other between the rows, neither crossing the
+    shared one (else a piece may end and another begin between the rows on the same
+    line; see :func:`_corner`)."""
     if len(A) != len(B):
         return False
     for i, (a, b) in enumerate(zip(A, B)):
         sa, sb = segs[a], segs[b]
-        if not (sa[0] < sb[1] and sb[0] < sa[1]) or not (sa[2][0] == sb[2][0] or sa[2][1] == sb[2][1]):
+        if not (sa[0] < sb[1] and sb[0] < sa[1]):
+            return False
+        if sa[2] != sb[2] and not _corner(sa[2], sb[2], ya, yb, curves):
             return False
         if i + 1 < len(A) and (sa[1] > segs[B[i + 1]][0] or sb[1] > segs[A[i + 1]][0]):
             return False                                  # overlaps its neighbour's partner too
     return True
+
+
+def _corner(ca: tuple[int, int], cb: tuple[int, int], ya: float, yb: float, curves: _Curves) -> bool:
+    """Whether segments bounded by curves ``ca`` on row ``ya`` and ``cb`` on row ``yb`` are
+    one piece turning a corner between the rows: one curve shared and staying on the same
+    side of the other two, which cross each other between the rows, or meet there as a
+    disc and a common tangent of it at its point of contact."""
+    if ca[0] == cb[0]:
+        shared, u, v = ca[0], ca[1], cb[1]
+    elif ca[1] == cb[1]:
+        shared, u, v = ca[1], ca[0], cb[0]
+    else:
+        return False
+    t, xu, xv = curves.x([shared, u, v], np.array([ya, yb]))       # x of each on both rows
+    side = np.sign(xu[0] - t[0])                # u bounds row ya's segment, v row yb's
+    if side == 0 or np.sign(xv[1] - t[1]) != side:
+        return False
+    for x in (xu, xv):                          # the shared curve crosses neither between the rows
+        if np.all(np.isfinite(x)) and np.sign(x[1] - t[1]) != np.sign(x[0] - t[0]):
+            return False
+    if np.all(np.isfinite(xu)) and np.all(np.isfinite(xv)) and np.sign(xu[0] - xv[0]) * np.sign(xu[1] - xv[1]) < 0:
+        return True
+    touch = curves.contact_y(u, v)
+    return touch is not None and min(ya, yb) <= touch <= max(ya, yb)
+
+
+class _Curves:
+    """The curves of :func:`_row_segments`, by its numbers: discs' left and right halves,
+    their x-extents, the room's halves and the common tangents not parallel to the rows."""
+
+    def __init__(self, centers: np.ndarray, radii: np.ndarray, lines: np.ndarray, room_radius: float):
+        self.centers, self.radii, self.room_radius = centers, radii, room_radius
+        self.lines = lines[np.abs(lines[:, 0]) > 1e-12] if len(lines) else np.zeros((0, 3))
+
+    def x(self, curves: list[int], ys: np.ndarray) -> np.ndarray:
+        """(len(curves), len(ys)) float: x (metres) of each curve on each row y; NaN where
+        it does not cross the row."""
+        m, c, r = len(self.centers), self.centers, self.radii
+        out = np.full((len(curves), len(ys)), np.nan)
+        for n, k in enumerate(curves):
+            if k < 2 * m:                                   # a disc's left (k < m) or right half
+                dy = ys - c[k % m, 1]
+                half = np.sqrt(np.where(np.abs(dy) < r[k % m], r[k % m] ** 2 - dy**2, np.nan))
+                out[n] = c[k % m, 0] + (half if k >= m else -half)
+            elif k < 4 * m:                                 # a disc's x-extent
+                out[n] = c[k % m, 0] + (r[k % m] if k >= 3 * m else -r[k % m])
+            elif k < 4 * m + 2:                             # the room's left or right half
+                half = np.sqrt(np.where(np.abs(ys) <= self.room_radius, self.room_radius**2 - ys**2, np.nan))
+                out[n] = half if k == 4 * m + 1 else -half
+            else:
+                nx, ny, d = self.lines[k - 4 * m - 2]
+                out[n] = (d - ny * ys) / nx
+        return out
+
+    def contact_y(self, a: int, b: int) -> float | None:
+        """y (metres) where a disc's half and a line tangent to that half, curves ``a`` and
+        ``b`` in either order, touch; None for other pairs."""
+        m = len(self.centers)
+        disc, line = (a, b) if a < 2 * m else (b, a)
+        if not (disc < 2 * m and line >= 4 * m + 2):
+            return None
+        nx, ny, d = self.lines[line - 4 * m - 2]
+        j = disc % m
+        off = nx * self.centers[j, 0] + ny * self.centers[j, 1] - d       # signed distance of the centre
+        if abs(abs(off) - self.radii[j]) > 1e-9 or (-off * nx > 0) != (disc >= m):   # its x side of the centre
+            return None
+        return float(self.centers[j, 1] - off * ny)
 
 
 def _row_segments(ys: np.ndarray, centers: np.ndarray, radii: np.ndarray, lines: np.ndarray,
