@@ -169,14 +169,18 @@ def test_a_constant_velocity_walk_is_tracked_without_lag():
     np.testing.assert_allclose(tracker.estimates(), truth[-1], atol=1e-4)
 
 
-@pytest.mark.parametrize("accel_std, meas_std", [(0.3, 0.05), (2.0, 0.08)])
+@pytest.mark.parametrize("accel_std, meas_std", [(0.3, 0.05), (2.0, 0.08), (None, None)])
 def test_the_filter_settles_to_the_steady_state_of_the_constant_velocity_model(accel_std, meas_std):
     """After many updates a track's covariance is the textbook steady state of the
     discrete white-noise-acceleration model (Kalata's tracking index lam = accel_std dt^2 /
     meas_std gives the alpha-beta gains; Bar-Shalom et al., Estimation with Applications to
-    Tracking, 6.5), per axis, with the axes uncorrelated."""
+    Tracking, 6.5), per axis, with the axes uncorrelated. None: the defaults, 7.5 Hz (the
+    paper's frame rate), 2 m/s^2 and 0.08 m."""
     dt = 1 / 7.5
-    tracker = Tracker(TrackerParams(dt=dt, accel_std=accel_std, meas_std=meas_std))
+    if accel_std is None:
+        tracker, accel_std, meas_std = Tracker(), 2.0, 0.08
+    else:
+        tracker = Tracker(TrackerParams(dt=dt, accel_std=accel_std, meas_std=meas_std))
     for _ in range(300):
         tracker.step([[3.0, 2.0]])
     lam = accel_std * dt**2 / meas_std
@@ -199,3 +203,109 @@ def test_a_confirmed_track_lives_through_max_missed_minus_one_misses():
     for _ in range(2):
         tracker.step(np.zeros((0, 2)))
     assert tracker.step([[1.0, 1.0]])[0].tolist() == ids.tolist()
+
+
+def test_default_parameters_confirm_on_the_third_match_and_end_on_the_third_miss():
+    """The loop and the studies keep the defaults confirm_hits = 3 and max_missed = 3."""
+    tracker = Tracker()
+    assert [len(tracker.step([[1.0, 1.0]])[0]) for _ in range(4)] == [0, 0, 1, 1]
+    for _ in range(2):
+        tracker.step(np.zeros((0, 2)))
+    assert tracker.ids.tolist() == [0]                 # two misses: still alive
+    tracker.step(np.zeros((0, 2)))
+    assert tracker.ids.size == 0                       # the third ends it
+
+
+def test_default_gate_is_half_a_metre():
+    """A stationary track (its prediction exactly where it was) matches a detection 0.5 m
+    away but not one 0.55 m away, which starts a new track instead."""
+    for dist, same in ((0.5, True), (0.55, False)):
+        tracker = Tracker()
+        tracker.step([[1.0, 1.0]])
+        tracker.step([[1.0 + dist, 1.0]])
+        assert tracker.ids.tolist() == ([0] if same else [1])
+
+
+@pytest.mark.parametrize("field, value", [("dt", 0.0), ("dt", -0.1), ("dt", np.inf), ("gate", -1.0),
+                                          ("accel_std", 0.0), ("meas_std", 0.0), ("max_missed", 0)])
+def test_every_parameter_is_checked(field, value):
+    with pytest.raises(ValueError, match=f"tracker.{field}"):
+        TrackerParams(**{field: value})
+
+
+def test_the_second_frame_is_one_textbook_kalman_update_from_the_birth_prior():
+    """Born at z0 with covariance diag(meas_std^2, 1 (m/s)^2) per axis and no velocity, then
+    one predict and one update with z1, written out per axis in scalars: prior P = F P0 F' +
+    Q with Q = accel_std^2 [[dt^4/4, dt^3/2], [dt^3/2, dt^2]], gain K = P[:, 0] / (P00 +
+    meas_std^2)."""
+    dt, a, s = 0.2, 1.5, 0.1
+    tracker = Tracker(TrackerParams(dt=dt, accel_std=a, meas_std=s, confirm_hits=2))
+    z0, z1 = np.array([2.0, 1.0]), np.array([2.12, 0.95])
+    tracker.step([z0])
+    ids, xy = tracker.step([z1])
+    p00 = s**2 + dt**2 + a**2 * dt**4 / 4
+    p01 = dt + a**2 * dt**3 / 2
+    k0, k1 = p00 / (p00 + s**2), p01 / (p00 + s**2)
+    pos, vel = z0 + k0 * (z1 - z0), k1 * (z1 - z0)
+    assert ids.tolist() == [0]
+    np.testing.assert_allclose(xy, [pos], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(tracker.x[0, 2:], vel, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(tracker.estimates(), [pos + dt * vel], rtol=0, atol=1e-12)
+
+
+def test_a_confirmed_track_is_not_reported_on_a_frame_it_misses():
+    """tracks() are the confirmed tracks seen this frame: a coasting track is alive but absent."""
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=2, max_missed=3))
+    for _ in range(2):
+        tracker.step([[1.0, 1.0]])
+    ids, xy = tracker.step(np.zeros((0, 2)))
+    assert ids.size == 0 and xy.shape == (0, 2) and tracker.ids.tolist() == [0]
+
+
+def test_every_unmatched_detection_starts_a_track_with_a_new_id():
+    """Ids are never reused: three people at once get 0, 1, 2, and two later ones 3, 4."""
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=1))
+    ids, xy = tracker.step([[0.0, 0.0], [2.0, 0.0], [4.0, 0.0]])
+    assert ids.tolist() == [0, 1, 2]                  # confirm_hits = 1: confirmed at birth
+    np.testing.assert_array_equal(xy, [[0.0, 0.0], [2.0, 0.0], [4.0, 0.0]])
+    ids, _ = tracker.step([[0.0, 0.0], [2.0, 0.0], [4.0, 0.0], [0.0, 3.0], [3.0, 3.0]])
+    assert ids.tolist() == [0, 1, 2, 3, 4]
+
+
+def test_no_detections_may_be_an_empty_list():
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=1))
+    tracker.step([[1.0, 1.0]])
+    ids, xy = tracker.step([])
+    assert ids.size == 0 and xy.shape == (0, 2) and tracker.missed.tolist() == [1]
+
+
+def test_a_detection_exactly_at_the_gate_matches_though_a_farther_one_comes_first():
+    """Gated matching: 0.6 m is outside the 0.5 m gate and 0.5 m (exact in binary) inside,
+    whatever the detections' order."""
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=1))
+    tracker.step([[1.0, 1.0]])                         # stationary: predicted at (1, 1) exactly
+    ids, xy = tracker.step([[1.6, 1.0], [1.5, 1.0]])
+    assert ids.tolist() == [0, 1]                      # 0 took (1.5, 1); (1.6, 1) is a new track
+    assert 1.0 < xy[0, 0] < 1.5 and xy[1].tolist() == [1.6, 1.0]
+
+
+def test_matching_first_maximises_the_matches_inside_the_gate():
+    """Tracks A at (0, 0) and B at (3, 0), gate 2; detections (1.5, 0) (1.5 m from both) and
+    (-1.5, 0) (1.5 m from A, 4.5 m from B). Both tracks match (A the second, B the first),
+    though A to the first alone would be cheaper."""
+    tracker = Tracker(TrackerParams(dt=0.1, gate=2.0, confirm_hits=1))
+    tracker.step([[0.0, 0.0], [3.0, 0.0]])
+    ids, xy = tracker.step([[1.5, 0.0], [-1.5, 0.0]])
+    assert ids.tolist() == [0, 1] and tracker.missed.tolist() == [0, 0]
+    assert xy[0, 0] < 0 and 1.5 < xy[1, 0] < 3
+
+
+def test_a_confirmed_track_wins_a_detection_within_a_micrometre_over_a_tentative_one():
+    """Confirmed tracks get first pick: A confirmed at (1, 1), B tentative at (2, 1), a
+    detection 1e-7 m nearer B than the midpoint goes to A (B is dropped: a tentative miss)."""
+    tracker = Tracker(TrackerParams(dt=0.1, gate=0.75, confirm_hits=2))
+    tracker.step([[1.0, 1.0]])
+    tracker.step([[1.0, 1.0], [2.0, 1.0]])             # A confirmed, B born
+    assert tracker.confirmed.tolist() == [True, False]
+    ids, _ = tracker.step([[1.5 + 1e-7, 1.0]])
+    assert ids.tolist() == [0] and tracker.ids.tolist() == [0]
