@@ -78,6 +78,8 @@ def test_angles_are_an_n_vector_of_finite_floats():
         check_angles("camera_yaw", [0.0, 1.0, 2.0], 2)
     with raises("camera_yaw must be finite (no NaN or inf)"):
         check_angles("camera_yaw", [0.0, np.inf], 2)
+    with raises("camera_yaw must have shape (2,); got shape (1, 2)"):     # the right size is not enough
+        check_angles("camera_yaw", [[0.0, 1.0]], 2)
 
 
 def test_fov_scalar_is_broadcast_and_may_exceed_pi():
@@ -89,6 +91,7 @@ def test_fov_scalar_is_broadcast_and_may_exceed_pi():
     "fov, message",
     [
         ([1.0, 1.0, 1.0], "fov must be a scalar or have shape (2,); got shape (3,)"),
+        ([1.0], "fov must be a scalar or have shape (2,); got shape (1,)"),     # not broadcast like a scalar
         ([1.0, np.nan], "fov must be finite (no NaN or inf)"),
         ([1.0, 0.0], "fov must be in (0, 2*pi) radians; got 0..1"),
         ([-0.5, 2.0], "fov must be in (0, 2*pi) radians; got -0.5..2"),
@@ -243,6 +246,13 @@ def test_overlapping_discs_are_named(centres, message):
         check_discs_disjoint(np.array(centres), np.full(len(centres), 0.1))
 
 
+def test_discs_overlapping_by_a_nanometre_are_refused():
+    """Only rounding (1e-12 m) is forgiven: discs of 0.25 m whose centres are 0.5 m - 1e-9 m
+    apart overlap."""
+    with raises("centers: objects 0 and 1 overlap (distance 0.5 m)"):
+        check_discs_disjoint(np.array([[0.0, 0.0], [0.5 - 1e-9, 0.0]]), np.array([0.25, 0.25]))
+
+
 def test_overlapping_discs_message_carries_the_name():
     with raises("estimates: objects 0 and 1 overlap (distance 0 m)"):
         check_discs_disjoint(np.zeros((2, 2)), np.array([0.1, 0.1]), name="estimates")
@@ -280,6 +290,11 @@ def test_first_camera_inside_a_disc_is_named(cameras, message):
     centres, radii = np.array([[0.0, 0.0], [2.0, 2.0]]), np.array([0.2, 0.1])
     with raises(message):
         check_cameras_outside_discs(np.array(cameras), centres, radii)
+
+
+def test_a_camera_a_nanometre_inside_a_disc_is_refused():
+    with raises("camera_xy: camera 0 is inside object 0"):
+        check_cameras_outside_discs(np.array([[0.25 - 1e-9, 0.0]]), np.zeros((1, 2)), np.array([0.25]))
 
 
 def test_camera_inside_the_only_disc_is_found():
