@@ -794,3 +794,96 @@ def test_cluster_axes_of_axes_k_means_cannot_tell_apart_are_nonempty_and_below_p
     assert np.all((centres >= 0) & (centres < np.pi))
     for c in centres:                                   # each centre on one of the three axes
         assert axial_distance(c, np.array([0.0, np.pi / 2, 0.3])).min() < 1e-8
+
+
+def test_axial_distance_is_the_angle_between_two_axes_in_0_to_a_right_angle():
+    """Hand values: axes a quarter turn apart are pi / 2 apart whichever way round, axes pi or
+    2 pi apart coincide, and 170 degrees from 10 degrees is 20 degrees."""
+    d = axial_distance(np.radians([0.0, 90.0, 0.0, 30.0, 10.0, 0.0]),
+                       np.radians([90.0, 0.0, 180.0, 390.0, 170.0, 135.0]))
+    np.testing.assert_allclose(d, np.radians([90.0, 90.0, 0.0, 0.0, 20.0, 45.0]), atol=1e-12)
+
+
+def test_pair_axes_by_hand_lie_in_0_to_pi():
+    """Pairs (0, 0)-(1, 1) and (0, 0)-(-1, 1): axes 45 and 135 degrees, each with its
+    perpendicular, which wraps into [0, pi): 135 and 45; and (-1, 1)-(1, 1): 0 and 90."""
+    got = pair_axes(np.array([[0.0, 0.0], [1.0, 1.0], [-1.0, 1.0]]))
+    # pairs in order (0, 1), (0, 2), (1, 2): axes first, then their perpendiculars
+    np.testing.assert_allclose(got, np.radians([45.0, 135.0, 0.0, 135.0, 45.0, 90.0]), atol=1e-12)
+
+
+def _optimal_partitions(axes, k):
+    """Every k-partition of the doubled-angle points of ``axes`` with the least k-means
+    inertia (brute force over all labelings), as (sorted centre angles, sorted sizes)."""
+    from itertools import product
+
+    feats = np.c_[np.cos(2 * axes), np.sin(2 * axes)]
+    found = []
+    for lab in product(range(k), repeat=len(axes)):
+        lab = np.array(lab)
+        if np.unique(lab).size < k or lab[0] != 0:
+            continue
+        means = np.array([feats[lab == j].mean(axis=0) for j in range(k)])
+        inertia = sum(((feats[lab == j] - means[j]) ** 2).sum() for j in range(k))
+        found.append((inertia, np.arctan2(means[:, 1], means[:, 0]) / 2 % np.pi, np.bincount(lab)))
+    best = min(f[0] for f in found)
+    return [(np.sort(c), np.sort(s)) for i, c, s in found if i <= best + 1e-9]
+
+
+@pytest.mark.parametrize("seed, k", [(0, 3), (0, 4), (14, 2), (14, 3)])
+def test_cluster_axes_find_the_least_inertia_partition(seed, k):
+    """Three estimates give six axes; the clusters are the k-partition of least inertia, found
+    by brute force over every labeling (here a single k-means start ends in a worse one)."""
+    axes = pair_axes(np.random.default_rng(seed).uniform(-0.8, 0.8, (3, 2)))
+    centres, sizes = cluster_axes(axes, k, seed=0)
+    assert any(np.allclose(np.sort(centres), c, atol=1e-9) and np.array_equal(np.sort(sizes), s)
+               for c, s in _optimal_partitions(axes, k))
+
+
+def test_clustering_ties_in_a_second_round_go_to_the_camera_farthest_from_its_nearest_chosen():
+    """Two estimates along x: axes 0 and 90, fewer than k = 3, so axis 0 picks twice (docs).
+    First camera 1 (the lowest index of the axis-0 cameras 1, 2, 3), then camera 0 for axis 90;
+    in the second round cameras 2 and 3 tie on axis 0, and the one whose nearest chosen
+    camera is farther wins: 3 (5 m from both) over 2 (4.7 m from camera 1, though 11 m from
+    camera 0), by 0.3 m. The result is sorted, not in picking order."""
+    from tasking.clustering import clustering_select
+
+    xy = np.array([[10.0, 0.0], [0.0, 0.0], [0.0, 4.7], [5.0, 0.0]])
+    yaw = np.radians([90.0, 0.0, 0.0, 180.0])
+    est = np.array([[0.0, 0.0], [1.0, 0.0]])
+    assert clustering_select(yaw, est, 3, seed=0, camera_xy=xy).tolist() == [0, 1, 3]
+
+
+def test_coverage_of_a_room_with_a_hole_leaves_the_hole_out():
+    """A pillar (a hole) is a closed ring of the arrangement, but no cell: the cells sum to the
+    room's area (15 m^2), and subset areas are the hulls'."""
+    room = box(0, 0, 4, 4).difference(box(1.5, 1.5, 2.5, 2.5))
+    xy = np.array([[0.0, 1.0], [1.0, 0.0], [4.0, 3.0], [3.0, 4.0]])
+    yaw = np.array([0.3, np.pi / 2 + 0.2, np.pi - 0.1, -np.pi / 2])
+    w = free_wedges_from_discs(xy, yaw, np.radians(100), [[0.8, 3.0]], R, room, strict=False)
+    cov = coverage_cells(w, room)
+    assert cov.areas.sum() == pytest.approx(15.0, abs=1e-9)
+    subsets = [list(s) for j in range(1, 5) for s in combinations(range(4), j)]
+    np.testing.assert_allclose([subset_areas(cov, [s])[0] for s in subsets],
+                               [hull_from_wedges(w, room, s).area for s in subsets], rtol=0, atol=1e-9)
+
+
+def test_coverage_table_is_read_only():
+    w = free_wedges_from_discs(*ring_cameras(4), np.pi, [[0.2, 0.1]], R, ROOM)
+    cov = coverage_cells(w, ROOM)
+    for arr in (cov.masks, cov.areas):
+        with pytest.raises(ValueError, match="read-only"):
+            arr[0] = arr[0]
+
+
+@pytest.mark.parametrize("n", [63, 64])
+def test_optimal_subset_of_63_and_64_cameras_by_hand(n):
+    """Cell u, of area 1 + |u - 40|, is covered by every camera but u: one camera leaves
+    only its own cell in the hull, smallest for camera 40; any two cover everything (all
+    tie: the first pair). 63 cameras are the most that fit the uint64 bit masks, 64 the
+    first scored by the table."""
+    from tasking.coverage import Coverage, optimal_subset
+
+    cov = Coverage(~np.eye(n, dtype=bool), 1.0 + np.abs(np.arange(n) - 40))
+    assert optimal_subset(cov, 1) == [40]
+    assert optimal_subset(cov, 2) == [0, 1]
