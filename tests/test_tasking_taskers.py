@@ -887,3 +887,86 @@ def test_optimal_subset_of_63_and_64_cameras_by_hand(n):
     cov = Coverage(~np.eye(n, dtype=bool), 1.0 + np.abs(np.arange(n) - 40))
     assert optimal_subset(cov, 1) == [40]
     assert optimal_subset(cov, 2) == [0, 1]
+
+
+def _greedy_by_hulls(w, room, k, start=()):
+    """Greedy by full hull areas (ties within LAZY_TOL of the room: lowest index)."""
+    from tasking.taskers import LAZY_TOL
+
+    chosen = []
+    for _ in range(k):
+        cand = [c for c in range(len(w)) if c not in chosen and c not in start]
+        areas = np.array([hull_from_wedges(w, room, [*start, *chosen, c]).area for c in cand])
+        chosen.append(cand[int(np.flatnonzero(areas <= areas.min() + LAZY_TOL * room.area)[0])])
+    return chosen
+
+
+def test_greedy_with_the_last_camera_blind():
+    """The last camera stands inside an estimate, so it proves nothing empty (no wedge at all):
+    the fast gains still cover every candidate, and greedy is greedy by full hulls."""
+    xy, yaw = ring_cameras(8)
+    est = np.array([[0.3, 0.1], [-0.2, -0.4], xy[7] * 0.95])
+    w = free_wedges_from_discs(xy, yaw, np.pi, est, R, ROOM, strict=False)
+    assert w[7].is_empty
+    for tasker in ("greedy", "lazy_greedy"):
+        got = choose_cameras(tasker, 7, xy, yaw, np.pi, est, R, ROOM)
+        assert got.tolist() == sorted(_greedy_by_hulls(w, ROOM, 7)), tasker
+
+
+def test_greedy_from_a_start_never_adds_a_camera_of_the_start():
+    """Four 180-degree cameras on a ring, no objects: each sees the whole room, so camera 0
+    alone empties it; every gain is then zero and the ties go to the lowest cameras not
+    tasked, 1 and 2 (not 0 again)."""
+    xy, yaw = ring_cameras(4)
+    w, cones = free_wedges_from_discs(xy, yaw, np.pi, np.zeros((0, 2)), R, ROOM, return_cones=True)
+    for c in (None, cones):
+        for select in (greedy_select, lazy_greedy_select):
+            chosen, hull = select(w, ROOM, 2, start=[0], cones=c)
+            assert chosen == [1, 2] and hull.area < 1e-9 * ROOM.area
+
+
+def test_greedy_returns_the_hull_of_its_choice():
+    xy, yaw, c = drop(11, n=10, m=4)
+    w = free_wedges_from_discs(xy, yaw, np.pi, c, R, ROOM)
+    for select in (greedy_select, lazy_greedy_select):
+        chosen, hull = select(w, ROOM, 4)
+        assert hull.area == pytest.approx(hull_from_wedges(w, ROOM, chosen).area, rel=0, abs=1e-9)
+    chosen, hull = lazy_greedy_select(w, ROOM, 4, final_hull=False)
+    assert hull is None and len(chosen) == 4
+
+
+def test_incremental_ties_go_to_the_lowest_index_whatever_the_rounding():
+    """No objects and 180-degree cameras on a ring, each seeing the whole room: every hull is
+    empty, up to rounding. Removals take the lowest kept index (3, then 5), adds the lowest
+    free one (0, then 1)."""
+    xy, yaw = ring_cameras(12)
+    got = choose_cameras("incremental", 3, xy, yaw, np.pi, np.zeros((0, 2)), R, ROOM, current=[3, 5, 6], m=2)
+    assert got.tolist() == [0, 1, 6]
+
+
+def test_optimal_accepts_exactly_max_subsets():
+    """C(6, 3) = 20 subsets with max_subsets = 20 is within the limit (19 is refused)."""
+    got = choose_cameras("optimal", 3, XY, YAW, np.pi, EST, R, ROOM, max_subsets=20)
+    assert got.size == 3
+    with pytest.raises(ValueError, match="max_subsets"):
+        choose_cameras("optimal", 3, XY, YAW, np.pi, EST, R, ROOM, max_subsets=19)
+
+
+def test_incremental_tasker_first_step_off_the_schedule_is_greedy():
+    """The first step tasks greedy's cameras even on a frame that is not an update frame."""
+    xy, yaw, c = drop(9, n=12, m=4)
+    got = IncrementalTasker(k=4, m=1, update_every=3).step(1, xy, yaw, np.pi, c, R, ROOM)
+    assert got.tolist() == choose_cameras("greedy", 4, xy, yaw, np.pi, c, R, ROOM).tolist()
+
+
+def test_incremental_tasker_swaps_its_m_and_hands_out_copies():
+    xy, yaw, c = drop(9, n=12, m=4)
+    tasker = IncrementalTasker(k=4, m=2)
+    first = tasker.step(0, xy, yaw, np.pi, c, R, ROOM)
+    kept = first.copy()
+    first[:] = [8, 9, 10, 11]                           # the caller's array, not the tasker's state
+    moved = -c                                          # m = 1 and m = 2 end in other sets here
+    two = choose_cameras("incremental", 4, xy, yaw, np.pi, moved, R, ROOM, current=kept, m=2)
+    one = choose_cameras("incremental", 4, xy, yaw, np.pi, moved, R, ROOM, current=kept, m=1)
+    assert two.tolist() != one.tolist()
+    assert tasker.step(1, xy, yaw, np.pi, moved, R, ROOM).tolist() == two.tolist()
