@@ -604,10 +604,11 @@ def test_one_step_past_an_edge_is_refused(old, new, match):
 
 
 def test_edges_of_the_principal_point_and_field_of_view_of_a_small_image_load():
-    for old, new in [("hfov_deg: 60,", "hfov_deg: 60, principal: [127.5, 95.5],"),
-                     ("hfov_deg: 60,", "hfov_deg: 60, principal: [-64.5, -48.5],"),
-                     ("hfov_deg: 60", "hfov_deg: 179"), ("hfov_deg: 60", "hfov_deg: 1")]:
-        Scene.from_text(_edited(SMALL, old, new))
+    for old, new, principal in [("hfov_deg: 60,", "hfov_deg: 60, principal: [127.5, 95.5],", (127.5, 95.5)),
+                                ("hfov_deg: 60,", "hfov_deg: 60, principal: [-64.5, -48.5],", (-64.5, -48.5)),
+                                ("hfov_deg: 60", "hfov_deg: 179", (31.5, 23.5)), ("hfov_deg: 60", "hfov_deg: 1", (31.5, 23.5))]:
+        K = Scene.from_text(_edited(SMALL, old, new)).cameras[0].K
+        assert (K[0, 2], K[1, 2]) == principal
 
 
 @pytest.mark.parametrize("old, new, match", [
