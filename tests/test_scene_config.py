@@ -432,10 +432,10 @@ def test_extreme_numbers_are_refused_on_loading_naming_the_key(text, match):
 
 
 def test_the_bounds_keep_the_built_in_scenes_and_their_edges():
-    Scene.from_text(LAB.replace("frame_rate: 7.5", "frame_rate: 10000"), "s.yaml")
-    Scene.from_text(LAB.replace("frame_rate: 7.5", "frame_rate: 0.001"), "s.yaml")
-    Scene.from_text(LAB.replace("width: 6.7056", "width: 100"), "s.yaml")
-    Scene.from_text(CIRCLE.replace("count: 16", "count: 10000"), "s.yaml")
+    assert Scene.from_text(LAB.replace("frame_rate: 7.5", "frame_rate: 10000"), "s.yaml").frame_rate == 10000
+    assert Scene.from_text(LAB.replace("frame_rate: 7.5", "frame_rate: 0.001"), "s.yaml").frame_rate == 0.001
+    assert Scene.from_text(LAB.replace("width: 6.7056", "width: 100"), "s.yaml").room.polygon.bounds[2] == 100
+    assert len(Scene.from_text(CIRCLE.replace("count: 16", "count: 10000"), "s.yaml").cameras) == 10000
 
 
 @pytest.mark.parametrize("old, new, match", [
@@ -502,20 +502,25 @@ def test_a_built_in_scene_is_named_by_one_of_its_names():
         scene_path("hall")
 
 
-@pytest.mark.parametrize("old, new", [
-    ("position: [0.1, 0.1, 2.0]", "position: [0.1, 0.1, 0.01]"),       # just above the floor
-    ("position: [0.1, 0.1, 2.0]", "position: [0.0, 0.4, 2.0]"),     # on a wall
-    ("pitch_deg: 10", "pitch_deg: 89.5"),
-    ("pitch_deg: 10", "pitch_deg: -89.5"),
-    ("resolution: [64, 48]", "resolution: [2, 2]"),
-    ("resolution: [64, 48]", "resolution: [16380, 2]"),
-    ("radius: 0.25}", "radius: 0.25, height: 2.5}"),                     # as tall as the ceiling
-    ("radius: 0.25}", "radius: 0.25, colours: [[0, 0, 0], [255, 255, 255]]}"),
-    ("radius: 0.25}", "radius: 0.25, positions: [[1.0, 1.0], [1.5, 1.0]]}"),   # touching, not overlapping
-    ("radius: 0.25}", "radius: 0.25}\nuniform_sets: {1: [1]}"),
+@pytest.mark.parametrize("old, new, loaded, want", [
+    ("position: [0.1, 0.1, 2.0]", "position: [0.1, 0.1, 0.01]",              # just above the floor
+     lambda s: s.cameras[0].center_world.tolist(), [0.1, 0.1, 0.01]),
+    ("position: [0.1, 0.1, 2.0]", "position: [0.0, 0.4, 2.0]",               # on a wall
+     lambda s: s.cameras[0].center_world.tolist(), [0.0, 0.4, 2.0]),
+    ("pitch_deg: 10", "pitch_deg: 89.5", lambda s: round(np.degrees(s.cameras[0].pitch), 9), 89.5),
+    ("pitch_deg: 10", "pitch_deg: -89.5", lambda s: round(np.degrees(s.cameras[0].pitch), 9), -89.5),
+    ("resolution: [64, 48]", "resolution: [2, 2]", lambda s: (s.cameras[0].width, s.cameras[0].height), (2, 2)),
+    ("resolution: [64, 48]", "resolution: [16380, 2]", lambda s: (s.cameras[0].width, s.cameras[0].height), (16380, 2)),
+    ("radius: 0.25}", "radius: 0.25, height: 2.5}", lambda s: s.people.height, 2.5),      # as tall as the ceiling
+    ("radius: 0.25}", "radius: 0.25, colours: [[0, 0, 0], [255, 255, 255]]}",
+     lambda s: np.asarray(s.people.colours).tolist(), [[0, 0, 0], [255, 255, 255]]),
+    ("radius: 0.25}", "radius: 0.25, positions: [[1.0, 1.0], [1.5, 1.0]]}",          # touching, not overlapping
+     lambda s: np.asarray(s.people.positions).tolist(), [[1.0, 1.0], [1.5, 1.0]]),
+    ("radius: 0.25}", "radius: 0.25}\nuniform_sets: {1: [1]}", lambda s: s.uniform_sets, {1: (1,)}),
 ])
-def test_values_at_the_edges_of_their_ranges_load(old, new):
-    Scene.from_text(_edited(SMALL, old, new))
+def test_values_at_the_edges_of_their_ranges_load(old, new, loaded, want):
+    got = loaded(Scene.from_text(_edited(SMALL, old, new)))
+    assert got == want or np.allclose(got, want, rtol=0, atol=1e-12), got
 
 
 def test_two_people_overlapping_are_refused():
