@@ -15,10 +15,10 @@ and circles, each decided exactly by testing its midpoint. Integrating the cover
 lengths over a fine grid of rows (midpoint rule in y, exact in x) gives the limit area.
 Connected pieces (for pruning the small ones) join segments of adjacent rows bounded by
 the same two curves, or by one of them and two that cross (or touch, a disc and its
-tangent) between the rows: between such rows they are one cell. Where the rows' pieces differ
-(a piece starting or ending, two pieces meeting or parting), the strip is halved, down to a 64th of
-the row spacing, and joined by x-overlap only there: joining by overlap at the rows
-themselves merged pieces a fraction of a millimetre apart.
+tangent) between the rows: between such rows they are one cell. Where the rows' pieces
+differ (a piece starting or ending, two pieces meeting or parting), the strip is halved,
+down to a 64th of the row spacing, and joined by x-overlap only there: joining by
+overlap at the rows themselves merged pieces a fraction of a millimetre apart.
 
 This is what ``camtask study cameras`` uses by default for the "infinite" case; the
 paper approximated it with 2000 cameras (``--limit-cameras 2000`` still does that).
@@ -135,9 +135,9 @@ def limit_residual(
     if raw == 0.0:
         return raw, raw
     # Connected pieces (union-find over every row's segments, refined rows included):
-    # segments of adjacent rows bounded by the same two curves, or turning a corner, are one
-    # cell of the strip between them; a strip where the rows differ is halved until they agree, or down
-    # to ``depth`` halvings, where segments that overlap in x are joined.
+    # segments of adjacent rows bounded by the same two curves, or turning a corner, are
+    # one cell of the strip between them; a strip where the rows differ is halved until
+    # they agree, or down to ``depth`` halvings, where segments that overlap in x are joined.
     segs = [seg for row in rows for seg in row]          # [x0, x1, ids, residual length, total, disc]
     curves = _Curves(centers, radii, lines, room_radius)
     parent = list(range(len(segs)))
@@ -240,25 +240,28 @@ class _Curves:
         self.centers, self.radii, self.room_radius = centers, radii, room_radius
         self.lines = lines[np.abs(lines[:, 0]) > 1e-12] if len(lines) else np.zeros((0, 3))
 
+    def all_x(self, ys: np.ndarray) -> np.ndarray:
+        """(len(ys), number of curves) float: x (metres) of every curve on each row y, the
+        column being the curve's number; NaN where a disc does not cross the row."""
+        c, r = self.centers, self.radii
+        dy = ys[:, None] - c[None, :, 1]
+        half = np.sqrt(np.maximum(r[None, :] ** 2 - dy**2, 0.0))
+        circ = np.where(np.abs(dy) < r[None, :], 1.0, np.nan)
+        xr = np.sqrt(np.maximum(self.room_radius**2 - ys**2, 0.0))
+        nx, ny, d = self.lines.T
+        return np.concatenate([
+            c[None, :, 0] - half * circ,                    # discs' left halves
+            c[None, :, 0] + half * circ,                    # and right halves
+            np.broadcast_to(c[None, :, 0] - r, dy.shape),   # their x-extents
+            np.broadcast_to(c[None, :, 0] + r, dy.shape),
+            -xr[:, None],                                   # the room's halves
+            xr[:, None],
+            (d[None] - ny[None] * ys[:, None]) / nx[None],  # the common tangents
+        ], axis=1)
+
     def x(self, curves: list[int], ys: np.ndarray) -> np.ndarray:
-        """(len(curves), len(ys)) float: x (metres) of each curve on each row y; NaN where
-        it does not cross the row."""
-        m, c, r = len(self.centers), self.centers, self.radii
-        out = np.full((len(curves), len(ys)), np.nan)
-        for n, k in enumerate(curves):
-            if k < 2 * m:                                   # a disc's left (k < m) or right half
-                dy = ys - c[k % m, 1]
-                half = np.sqrt(np.where(np.abs(dy) < r[k % m], r[k % m] ** 2 - dy**2, np.nan))
-                out[n] = c[k % m, 0] + (half if k >= m else -half)
-            elif k < 4 * m:                                 # a disc's x-extent
-                out[n] = c[k % m, 0] + (r[k % m] if k >= 3 * m else -r[k % m])
-            elif k < 4 * m + 2:                             # the room's left or right half
-                half = np.sqrt(np.where(np.abs(ys) <= self.room_radius, self.room_radius**2 - ys**2, np.nan))
-                out[n] = half if k == 4 * m + 1 else -half
-            else:
-                nx, ny, d = self.lines[k - 4 * m - 2]
-                out[n] = (d - ny * ys) / nx
-        return out
+        """(len(curves), len(ys)) float: x (metres) of the given curves on each row y."""
+        return self.all_x(ys)[:, curves].T
 
     def contact_y(self, a: int, b: int) -> float | None:
         """y (metres) where a disc's half and a line tangent to that half, curves ``a`` and
@@ -281,26 +284,11 @@ def _row_segments(ys: np.ndarray, centers: np.ndarray, radii: np.ndarray, lines:
     ``[x0, x1, (left curve, right curve), residual length, length, holds a disc]`` (metres):
     runs of touching intervals of the hull (the discs included), each interval between
     consecutive crossings of the row with the discs, the pairs' common tangents and the
-    room, decided by its midpoint. Curves are numbered the same on every row."""
+    room, decided by its midpoint. Curves are numbered the same on every row (:class:`_Curves`)."""
     m = len(centers)
     R = len(ys)
     xr = np.sqrt(np.maximum(room_radius**2 - ys**2, 0.0))
-    dy = ys[:, None] - centers[None, :, 1]
-    half = np.sqrt(np.maximum(radii[None, :] ** 2 - dy**2, 0.0))
-    circ = np.where(np.abs(dy) < radii[None, :], 1.0, np.nan)
-    bx = [
-        centers[None, :, 0] - half * circ,
-        centers[None, :, 0] + half * circ,
-        np.broadcast_to(centers[None, :, 0] - radii, (R, m)),
-        np.broadcast_to(centers[None, :, 0] + radii, (R, m)),
-        -xr[:, None],
-        xr[:, None],
-    ]
-    if len(lines):
-        nx, ny, c = lines.T
-        ok = np.abs(nx) > 1e-12
-        bx.append((c[None, ok] - ny[None, ok] * ys[:, None]) / nx[None, ok])
-    bx = np.concatenate(bx, axis=1)
+    bx = _Curves(centers, radii, lines, room_radius).all_x(ys)
     bx = np.where((bx >= -xr[:, None]) & (bx <= xr[:, None]), bx, np.nan)
     order = np.argsort(bx, axis=1)  # NaNs last; the column is the curve's number
     bx = np.take_along_axis(bx, order, axis=1)
