@@ -1,4 +1,5 @@
-"""Rendered frames: labels agree with cv2.projectPoints silhouettes, seeded noise, backgrounds."""
+"""Rendered frames: labels agree with cv2.projectPoints silhouettes, seeded noise, backgrounds;
+the rasteriser itself on hand-made triangles (labels, depth ties, near cameras, bands, boxes)."""
 
 import cv2
 import numpy as np
@@ -111,3 +112,170 @@ def test_culling_back_faces_keeps_every_label(lab, lab_renderer, people):
         edge = cv2.morphologyEx(lab_k, cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8)) > 0
         outline[k] = cv2.dilate(edge.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
     assert not (changed & ~outline).any()
+
+
+# -- the rasteriser on hand-made triangles ---------------------------------------------
+# With an identity view-projection matrix the vertex positions are normalised device
+# coordinates: a canvas of S x S pixels spans [-1, 1]^2, pixel column c covers
+# x in [2c/S - 1, 2(c+1)/S - 1], and the rows come out bottom first (no row flip here);
+# window depth is (z + 1) / 2, and z outside [-1, 1] is clipped (unless depth-clamped).
+
+S = 64
+EYE = np.eye(4, dtype=np.float32)[None]
+
+
+def _quad(cx, cy, half, z, colour, person):
+    """Two triangles covering [cx - half, cx + half] x [cy - half, cy + half] at depth z."""
+    corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, -1], [1, 1], [-1, 1]], float) * half + [cx, cy]
+    return (np.column_stack([corners, np.full(6, z)]), np.tile(colour, (6, 1)), np.full(6, float(person)))
+
+
+def _raster(quads, n_people, n_tiles=1, near_only=0):
+    from render.geometry import Mesh
+    from render.raster import Rasteriser
+
+    mesh = Mesh(*(np.concatenate([q[i] for q in quads]).astype(np.float32) for i in range(3)))
+    r = Rasteriser(mesh, n_people, S, S, n_tiles, near_only=near_only)
+    r.cull_back_faces = False           # the quads' winding does not matter here
+    return r
+
+
+def _px(ndc):
+    """The pixel columns (or rows) whose centres lie in NDC interval ``ndc``."""
+    lo, hi = ((np.asarray(ndc) + 1) * S / 2)
+    return slice(int(np.ceil(lo - 0.5)), int(np.ceil(hi - 0.5)))
+
+
+ROOM = (0.2, 0.4, 0.6)                  # -> RGB (51, 102, 153)
+
+
+def test_raster_labels_every_person_up_to_max_people():
+    """254 people (the uint8 label limit) in a 16 x 16 grid of 4 px cells: each cell has
+    its person's label, index + 1, and its colour; a 255th person is refused."""
+    from render.raster import MAX_PEOPLE, Rasteriser
+
+    assert MAX_PEOPLE == 254
+    quads = [_quad(0.0, 0.0, 0.05, 0.0, (k / 255, 0.2, 0.6), k) for k in range(MAX_PEOPLE)]
+    cells = np.arange(MAX_PEOPLE)
+    offsets = np.column_stack([(4 * (cells % 16) + 2) / 32 - 1, (4 * (cells // 16) + 2) / 32 - 1])
+    r = _raster(quads, MAX_PEOPLE)
+    try:
+        px = r.draw(EYE, offsets).copy()[0]
+    finally:
+        r.close()
+    for k in range(256):
+        cell = px[4 * (k // 16):4 * (k // 16) + 4, 4 * (k % 16):4 * (k % 16) + 4].reshape(-1, 4)
+        expected = [k, 51, 153, k + 1] if k < MAX_PEOPLE else [0, 0, 0, 0]    # the last two cells: empty
+        assert (cell == expected).all(), (k, cell[0])
+    with pytest.raises(ValueError, match="at most 254 people"):
+        Rasteriser(None, MAX_PEOPLE + 1, S, S, 1)
+
+
+def test_raster_of_a_room_without_people():
+    r = _raster([_quad(0.0, 0.0, 1.0, 0.5, ROOM, -1)], 0)
+    try:
+        px = r.draw(EYE, np.zeros((0, 2)))[0]
+        assert (px.reshape(-1, 4) == [51, 102, 153, 0]).all()
+    finally:
+        r.close()
+
+
+def test_raster_room_wins_a_depth_tie_with_a_person():
+    """Room first, GL_LESS: where a person lies at exactly the room's depth (the floor line
+    of a foot) the room stays, as docs/render.md says."""
+    room = _quad(-0.5, 0.0, 0.5, 0.0, ROOM, -1)               # x in [-1, 0]
+    person = _quad(0.0, 0.0, 0.5, 0.0, (1.0, 0.0, 0.0), 0)     # x in [-0.5, 0.5], same depth
+    r = _raster([room, person], 1)
+    try:
+        px = r.draw(EYE, np.zeros((1, 2)))[0]
+        rows = _px([-0.5, 0.5])
+        assert (px[rows, _px([-1.0, 0.0])].reshape(-1, 4) == [51, 102, 153, 0]).all()
+        assert (px[rows, _px([0.0, 0.5])].reshape(-1, 4) == [255, 0, 0, 1]).all()
+    finally:
+        r.close()
+
+
+def test_raster_near_cameras_draw_people_unclipped_and_their_soles():
+    """For a camera flagged ``near`` the people are depth-clamped (a person nearer than the
+    near plane is drawn, in front of the room) and their last ``near_only`` vertices (the
+    soles) are drawn; the room is clipped as for any camera; other cameras clip the
+    people and skip the soles. Flags alternate so that each change is applied."""
+    back = _quad(0.0, 0.0, 1.0, 0.5, ROOM, -1)
+    room_near = _quad(-0.5, 0.5, 0.5, -1.5, (0.0, 1.0, 0.0), -1)     # top left, nearer than near
+    body = _quad(0.5, 0.5, 0.5, -1.5, (1.0, 0.0, 0.0), 0)             # top right, idem
+    sole = _quad(0.0, -0.5, 0.5, 0.0, (0.0, 0.0, 1.0), 0)             # bottom, in range
+    r = _raster([back, room_near, body, sole], 1, n_tiles=3, near_only=6)
+    try:
+        px = r.draw(np.repeat(EYE, 3, axis=0), np.zeros((1, 2)), bands=[0, 1, 2], near=[True, False, True]).copy()
+    finally:
+        r.close()
+    top, bottom = _px([0.0, 1.0]), _px([-1.0, 0.0])
+    left, right, middle = _px([-1.0, 0.0]), _px([0.0, 1.0]), _px([-0.5, 0.5])
+    room = [51, 102, 153, 0]
+    for k, near in enumerate([True, False, True]):
+        assert (px[k, top, left].reshape(-1, 4) == room).all()
+        assert (px[k, top, right].reshape(-1, 4) == ([255, 0, 0, 1] if near else room)).all()
+        assert (px[k, bottom, middle].reshape(-1, 4) == ([0, 0, 255, 1] if near else room)).all()
+
+
+def test_raster_draw_clears_the_bands_it_draws():
+    """A person drawn in bands 0-3, then bands 1-2 drawn with the person hidden: no trace left."""
+    r = _raster([_quad(0.0, 0.0, 1.0, 0.5, ROOM, -1), _quad(0.0, 0.0, 0.5, 0.0, (1.0, 0.0, 0.0), 0)], 1,
+                n_tiles=4)
+    try:
+        four = np.repeat(EYE, 4, axis=0)
+        assert (r.draw(four, np.zeros((1, 2)))[:, S // 2, S // 2] == [255, 0, 0, 1]).all()
+        for hidden in ([[np.nan, np.nan]], [[0.0, np.inf]]):
+            for bands in ([1, 2], [2, 0]):
+                px = r.draw(four[:2], np.array(hidden), bands=bands)
+                assert (px.reshape(-1, 4) == [51, 102, 153, 0]).all(), (hidden, bands)
+    finally:
+        r.close()
+
+
+def test_raster_draw_people_reads_only_its_rectangles():
+    """Over the stored room only the people are drawn, and each rectangle (rows top first
+    as read, x0, y0, x1, y1 end exclusive) is read into ``out``; nothing else is touched,
+    a camera without rectangles included."""
+    person = _quad(0.25, 0.25, 0.25, 0.0, (1.0, 0.0, 0.0), 0)      # pixels 32..47 both ways
+    r = _raster([_quad(0.0, 0.0, 1.0, 0.5, ROOM, -1), person], 1, n_tiles=2)
+    try:
+        with pytest.raises(RuntimeError, match="store_room"):
+            r.draw_people(EYE, np.zeros((1, 2)), [0], [[(0, 0, 4, 4)]], np.zeros_like(r.pixels))
+        r.draw(np.repeat(EYE, 2, axis=0), np.full((1, 2), np.nan))
+        r.store_room()
+        out = np.zeros_like(r.pixels)
+        r.draw_people(np.repeat(EYE, 2, axis=0), np.zeros((1, 2)), [0, 1], [[(24, 28, 44, 52)], []], out)
+    finally:
+        r.close()
+    expected = np.zeros_like(out)
+    expected[0, 28:52, 24:44] = [51, 102, 153, 0]
+    expected[0, 32:48, 32:44] = [255, 0, 0, 1]
+    assert np.array_equal(out, expected)
+
+
+def test_raster_checks_its_arguments():
+    from render.raster import Rasteriser
+
+    room = _quad(0.0, 0.0, 1.0, 0.5, ROOM, -1)
+    person = _quad(0.0, 0.0, 0.5, 0.0, (1.0, 0.0, 0.0), 0)
+    with pytest.raises(ValueError, match="room's vertices first"):
+        _raster([room, person, room], 1)
+    with pytest.raises(ValueError, match=r"near_only: expected 0\.\.6 "):
+        _raster([room, person], 1, near_only=7)
+    with pytest.raises(ValueError, match=r"near_only: expected 0\.\.6 "):
+        _raster([room, person], 1, near_only=-1)
+    r = _raster([room, person], 1, n_tiles=2, near_only=6)      # all of the people's vertices: allowed
+    try:
+        assert isinstance(r, Rasteriser)
+        two = np.repeat(EYE, 2, axis=0)
+        with pytest.raises(ValueError, match="view_projs: expected 1..2 cameras, got 3"):
+            r.draw(np.repeat(EYE, 3, axis=0), np.zeros((1, 2)))
+        for bands in ([0, 0], [1, 2], [-1, 0], [0]):
+            with pytest.raises(ValueError, match="bands: expected 2 distinct band numbers in 0..1"):
+                r.draw(two, np.zeros((1, 2)), bands=bands)
+        with pytest.raises(ValueError, match=r"near: expected one flag per camera \(2\), got 1"):
+            r.draw(two, np.zeros((1, 2)), near=[True])
+    finally:
+        r.close()
+    r.close()                                                      # twice: nothing left to free
