@@ -245,6 +245,13 @@ def test_floor_tiles_are_a_subtle_checker_with_per_tile_variation():
     assert odd.mean() / even.mean() == pytest.approx(1.05, abs=0.01)
     assert even.mean() == pytest.approx(1.0, abs=0.01)
     assert 0.015 < even.std() < 0.035 and 0.015 < (odd / 1.05).std() < 0.035
+    # the variation reaches every tile: no row or column of tiles is left at the plain checker
+    spread = {}
+    for (a, b), v in tiles.items():
+        plain = 1.05 if (a + b) % 2 else 1.0
+        spread.setdefault(("column", a), []).append(v[0] / plain)
+        spread.setdefault(("row", b), []).append(v[0] / plain)
+    assert min(np.std(v) for v in spread.values()) > 0.01
 
 
 def test_a_sole_lit_from_below_takes_the_light_on_its_downward_normal():
@@ -253,3 +260,41 @@ def test_a_sole_lit_from_below_takes_the_light_on_its_downward_normal():
     m = sole(0.25, 2.0, np.array([200, 100, 50]), person=0, lighting=Lighting(direction=(0.6, 0.48, 0.64)))
     np.testing.assert_allclose(m.colours, np.tile(0.7 * np.array([200, 100, 50]) / 255 * (0.45 + 0.45 * 0.64),
                                                   (96, 1)), rtol=1e-5)
+
+
+def test_people_meshes_take_the_lighting_given():
+    """A light straight down (ambient 0.2, diffuse 0.3): the hair cap faces it (0.5), the
+    side at angle 0 is perpendicular to it and the sole faces away (ambient 0.2 alone)."""
+    colours = np.array([[200, 100, 50]], np.uint8)
+    people = People(1, 0.25, 1.75, 1.0, colours)
+    light = Lighting(direction=(0.0, 0.0, -1.0), ambient=0.2, diffuse=0.3)
+    bodies, soles = people_mesh(people, light), soles_mesh(people, light)
+    legs = 0.7 * colours[0] / 255
+    _check_colours_at(bodies, [0.0, 0.0, 1.75], np.array(HAIR) / 255 * 0.5)       # the cap's centre
+    _check_colours_at(bodies, [0.25, 0.0, 0.0], legs * 0.2)                       # the side, angle 0
+    np.testing.assert_allclose(soles.colours, np.tile(legs * 0.2, (96, 1)), rtol=1e-5)
+
+
+def test_concatenated_meshes_are_float32():
+    one = Mesh(np.zeros((3, 3)), np.ones((3, 3)), np.full(3, -1.0))               # float64 parts
+    two = Mesh(np.ones((3, 3), np.float32), np.zeros((3, 3), np.float32), np.zeros(3, np.float32))
+    m = Mesh.concatenate([one, two])
+    assert m.positions.dtype == m.colours.dtype == m.person.dtype == np.float32
+    assert np.array_equal(m.person, [-1, -1, -1, 0, 0, 0])
+    assert np.array_equal(m.positions, np.concatenate([np.zeros((3, 3)), np.ones((3, 3))]))
+
+
+def test_room_mesh_takes_the_lighting_given():
+    """Ambient 0.3 alone: every wall and ceiling vertex is its colour x 0.3. The lamp alone
+    (strength 0.5, 0.5 m under the 2.5 m ceiling of the 4 x 3 m room: at (2, 1.5, 2)):
+    wall 0 at (2, 0, 1.7) is d = (0, 1.5, 0.3) from it, cos = 1.5 / |d|, 4 / (1 + |d|^2)."""
+    room = Room.rectangle(4.0, 3.0, 2.5)
+    flat = room_mesh(room, Lighting(ambient=0.3, diffuse=0.0, lamp=0.0))
+    _check_colours_at(flat, [2.0, 0.0, 1.7], np.array(WALL_COLOURS[0]) / 255 * 0.3)
+    _check_colours_at(flat, [4.0, 1.0, 0.9], np.array(WALL_COLOURS[1]) / 255 * 0.3)
+    _check_colours_at(flat, [2.0, 0.0, 0.0], np.array(BASEBOARD[1]) / 255 * 0.3)
+    _check_colours_at(flat, [1.0, 1.0, 2.5], np.array(CEILING_COLOUR) / 255 * 0.3)
+    lamp_only = room_mesh(room, Lighting(ambient=0.0, diffuse=0.0, lamp=0.5, lamp_drop=0.5))
+    d2 = 1.5**2 + 0.3**2
+    _check_colours_at(lamp_only, [2.0, 0.0, 1.7],
+                      np.array(WALL_COLOURS[0]) / 255 * 0.5 * 1.5 / np.sqrt(d2) * 4 / (1 + d2))
