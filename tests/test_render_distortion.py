@@ -79,6 +79,13 @@ def test_barrel_and_pincushion_canvases():
     assert barrel.canvas_size[0] > 80 + 2 * 2 and barrel.canvas_size[1] > 60 + 2 * 2
     pincushion = distortion_maps(K_SMALL, PINCUSHION, 80, 60)
     assert pincushion.canvas_size == (80, 64) and pincushion.offset == (0, 2)
+    # a stronger pincushion (k1 = 0.2) without a margin lies inside the frame on every side:
+    # at the top edge's centre y (1 + 0.2 y^2) = -29.5 / 60 gives y = -0.4708, v = 1.25
+    # (u 2.76 .. 76.24, v 1.25 .. 57.75): the canvas is the image, not moved (never a
+    # negative offset, never smaller than the image)
+    tight = distortion_maps(K_SMALL, np.array([0.2, 0.0, 0.0, 0.0, 0.0]), 80, 60, margin=0)
+    assert tight.canvas_size == (80, 60) and tight.offset == (0, 0)
+    assert 1.2 < tight.map_xy[0, 40, 1] < 1.3
 
 
 def test_the_labs_canvas_is_the_documented_685_by_515(lab):
@@ -157,6 +164,14 @@ def test_regions_by_hand():
     lo, hi = _shifted_bounds(30, 40, -0.6)
     rects = np.array([[[10, 10, 15, 15]]])    # pixel 16 reads 15.4, i.e. canvas pixels 15 and 16
     assert regions_of(lo, hi, rects, (30, 40)) == [[(0, 30, 0, 32)]]
+    # pixel 15 reads 13.99, which OpenCV rounds to 14 (1/32 px): canvas pixels 14 and 15 (the
+    # second at weight 0 in its tables, but read: the half pixel of margin covers the rounding)
+    lo, hi = _shifted_bounds(30, 40, -1.01)
+    assert regions_of(lo, hi, np.array([[[15, 15, 20, 20]]]), (30, 40)) == [[(0, 30, 0, 32)]]
+    # a 40 x 50 image read where it lies: pixel 15 reads canvas pixels 15 and 16, not 17, and
+    # pixel 32 reads 32 and 33, not 30: the tiles around the middle one stay out
+    lo, hi = _shifted_bounds(50, 40, 0.0)
+    assert regions_of(lo, hi, np.array([[[17, 17, 30, 30]]]), (50, 40)) == [[(16, 32, 16, 32)]]
 
 
 def test_regions_of_several_cameras_and_none():
