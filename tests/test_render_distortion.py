@@ -27,7 +27,7 @@ def test_a_lens_without_distortion_is_the_identity():
     assert maps.identity and maps.nearest is None
     assert maps.canvas_size == (80, 60) and maps.offset == (0, 0)
     v, u = np.mgrid[0:60, 0:80]
-    assert np.array_equal(maps.map_xy, np.stack([u, v], -1))
+    assert np.array_equal(maps.map_xy, np.stack([u, v], -1)) and maps.map_xy.dtype == np.float32
     canvas = np.random.default_rng(0).integers(0, 256, (64, 90, 4), dtype=np.uint8)   # larger than the image
     image = distort(canvas, maps)
     assert np.array_equal(image, canvas[:60, :80]) and not np.shares_memory(image, canvas)
@@ -131,11 +131,13 @@ def test_a_region_is_the_same_pixels_of_the_whole_image(region):
     assert np.array_equal(out, distort(labels, maps, nearest=True)[r0:r1, c0:c1])
 
 
-def test_block_bounds_are_each_tiles_smallest_and_largest_map_position():
-    maps = distortion_maps(K_SMALL, BARREL, 80, 60)
-    assert maps.block_lo.shape == maps.block_hi.shape == (4, 5, 2)      # ceil(60 / 16), ceil(80 / 16)
-    for i in range(4):
-        for j in range(5):
+@pytest.mark.parametrize("size,tiles", [((80, 60), (4, 5)),       # ceil(60 / 16), ceil(80 / 16)
+                                        ((49, 33), (3, 4))])      # one column and one row in the last tiles
+def test_block_bounds_are_each_tiles_smallest_and_largest_map_position(size, tiles):
+    maps = distortion_maps(K_SMALL, BARREL, *size)
+    assert maps.block_lo.shape == maps.block_hi.shape == (*tiles, 2)
+    for i in range(tiles[0]):
+        for j in range(tiles[1]):
             tile = maps.map_xy[BLOCK * i:BLOCK * (i + 1), BLOCK * j:BLOCK * (j + 1)].reshape(-1, 2)
             assert np.array_equal(maps.block_lo[i, j], tile.min(axis=0))
             assert np.array_equal(maps.block_hi[i, j], tile.max(axis=0))
