@@ -276,6 +276,14 @@ def test_raster_checks_its_arguments():
                 r.draw(two, np.zeros((1, 2)), bands=bands)
         with pytest.raises(ValueError, match=r"near: expected one flag per camera \(2\), got 1"):
             r.draw(two, np.zeros((1, 2)), near=[True])
+        r.draw(two, np.full((1, 2), np.nan))
+        r.store_room()
+        with pytest.raises(ValueError, match="view_projs, bands, rects: expected one per camera, got 2, 2, 1"):
+            r.draw_people(two, np.zeros((1, 2)), [0, 1], [[(0, 0, 4, 4)]], np.zeros_like(r.pixels))
+        for out in (np.zeros((1, S, S, 4), np.uint8), np.zeros(r.pixels.shape, np.float32),
+                    np.zeros((2, S, S, 8), np.uint8)[..., ::2]):
+            with pytest.raises(ValueError, match=r"out: expected a C-contiguous uint8 array of shape \(2, 64, 64, 4\)"):
+                r.draw_people(two, np.zeros((1, 2)), [0, 1], [[(0, 0, 4, 4)], []], out)
     finally:
         r.close()
     r.close()                                                      # twice: nothing left to free
