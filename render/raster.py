@@ -367,7 +367,7 @@ class Rasteriser:
         offsets_xy : (n_people, 2) float, metres (NaN rows: hidden)
         bands : (n,) distinct ints, each camera's framebuffer band (as in :meth:`draw`)
         rects : n sequences of canvas rectangles (x0, y0, x1, y1), ints, end exclusive,
-            rows top first, within the canvas; a camera without one is skipped (nothing
+            rows top first, within the canvas (else ValueError); a camera without one is skipped (nothing
             drawn, nothing read)
         out : (n_tiles, H, W, 4) uint8, C-contiguous; each of band b's rectangles is read
             into ``out[b, y0:y1, x0:x1]``, the rest of ``out`` is left alone
@@ -389,6 +389,7 @@ class Rasteriser:
                              f"{len(view_projs)}, {len(bands)}, {len(rects)}")
         if out.shape != self.pixels.shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
             raise ValueError(f"out: expected a C-contiguous uint8 array of shape {self.pixels.shape}")
+        _check_rects(rects, self.width, self.height)
         near = _flags(near, len(bands))
         todo = np.array([k for k in range(len(bands)) if len(rects[k])], int)
         if not len(todo):
@@ -448,6 +449,21 @@ class Rasteriser:
             GL.glDeleteProgram(self.program)
         finally:
             self.program = None
+
+
+def _check_rects(rects, width: int, height: int) -> None:
+    """Refuse a rectangle (x0, y0, x1, y1) outside ``0 <= x0 <= x1 <= width``, ``0 <= y0 <= y1 <= height``.
+
+    A rectangle beyond the canvas would make ``glReadPixels`` write past its slice of ``out``.
+    """
+    for k, cam in enumerate(rects):
+        r = np.asarray(cam, dtype=np.int64).reshape(-1, 4)
+        x0, y0, x1, y1 = r.T
+        bad = (x0 < 0) | (y0 < 0) | (x1 < x0) | (y1 < y0) | (x1 > width) | (y1 > height)
+        if bad.any():
+            raise ValueError(f"rects[{k}]: rectangle {tuple(int(v) for v in r[np.argmax(bad)])} is not "
+                             f"within the {width}x{height} canvas (0 <= x0 <= x1 <= {width}, "
+                             f"0 <= y0 <= y1 <= {height})")
 
 
 def _flags(near, n: int) -> np.ndarray:
