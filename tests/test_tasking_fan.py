@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from shapely.geometry import MultiPoint, Point, box
+from shapely.geometry import MultiPoint, Point, Polygon, box
 
 from tasking.cones import wedge_polygons
 from tasking.fan import cone_areas, ring_edges, split_wide
@@ -145,3 +145,32 @@ def test_union_areas_of_a_room_whose_ring_repeats_a_vertex():
     sets = rng.random((8, 6)) < 0.5
     got = UnionAreas(convex_ring(room), cones, 6, 20.0)(sets)
     np.testing.assert_allclose(got, _union_reference(room, cones, sets, 20.0), rtol=0, atol=1e-9)
+
+
+def test_cone_areas_of_edges_passing_behind_the_apex_are_zero():
+    # the cone is the first quadrant; the triangle lies wholly in x + y <= -1, and its edge
+    # from (1, -2) to (-2, 1) crosses both rays' lines behind the apex (first the y = 0
+    # line's back half, then the x = 0 one's): inside neither ray's half-plane at once
+    tri = Polygon([(1, -2), (-2, 1), (-3, -3)])
+    got = cone_areas(*ring_edges(tri), np.zeros((1, 2)), np.zeros(1), np.array([np.pi / 2]))
+    assert got.tolist() == [0.0]
+    # the same edge as part of a square around the apex: only the quadrant's unit square
+    sq = Polygon([(1, -2), (1, 1), (-2, 1)])
+    got = cone_areas(*ring_edges(sq), np.zeros((1, 2)), np.zeros(1), np.array([np.pi / 2]))
+    assert abs(got[0] - 1.0) < 1e-12
+
+
+def test_cone_areas_in_blocks_match_shapely(monkeypatch):
+    # more cones than one block holds (BLOCK pairs of cone and edge): every block's cones
+    # must meet their own apexes
+    from tasking import fan
+
+    rng = np.random.default_rng(3)
+    poly = Point(0.2, -0.1).buffer(1.0, quad_segs=4)  # 16 edges
+    apex = rng.uniform(-1.5, 1.5, (23, 2))
+    t0 = rng.uniform(-np.pi, np.pi, 23)
+    t1 = t0 + rng.uniform(0.1, np.pi, 23)
+    monkeypatch.setattr(fan, "BLOCK", 5 * 16)  # 5 cones per block, the last block 3
+    got = cone_areas(*ring_edges(poly), apex, t0, t1)
+    want = [poly.intersection(w).area for w in wedge_polygons(apex, t0, t1, 20.0)]
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12)
