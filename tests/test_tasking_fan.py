@@ -174,3 +174,22 @@ def test_cone_areas_in_blocks_match_shapely(monkeypatch):
     got = cone_areas(*ring_edges(poly), apex, t0, t1)
     want = [poly.intersection(w).area for w in wedge_polygons(apex, t0, t1, 20.0)]
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12)
+
+
+def test_convex_ring_accepts_collinear_vertices_and_refuses_dents_and_holes():
+    from tasking.fan import convex_ring
+
+    # a vertex on an edge (its turn 0), in either orientation
+    ccw = Polygon([(0, 0), (1, 0), (2, 0), (2, 2), (0, 2)])
+    cw = Polygon([(0, 0), (0, 2), (2, 2), (2, 0), (1, 0)])
+    for room in (ccw, cw):
+        assert np.array_equal(convex_ring(room), np.asarray(room.exterior.coords))
+    # a vertex at 0.3 of an edge whose rounding makes its turn -9e-17 of the largest
+    a, m = (0.5159020047128562, 0.025517446524156107), (0.6826345592247665, -0.8666199824657972)
+    b, c = (0.8582084415940123, -0.8678350065518505), (0.618593935777203, -0.24248828939864586)
+    assert convex_ring(Polygon([a, m, b, c])) is not None
+    # a dent of 1e-3 m in a 1 m square; a hole whose ring would turn the same way throughout
+    assert convex_ring(Polygon([(0, 0), (1, 0), (1, 1), (0.5, 0.999), (0, 1)])) is None
+    hole = [(3.3506488814064777, 3.324870928249579), (3.3829327123116366, 3.3760437365656712),
+            (3.3859556977471463, 3.3914704625655396)]
+    assert convex_ring(Polygon([(0, 0), (4, 0), (4, 4), (0, 4)], [hole])) is None
