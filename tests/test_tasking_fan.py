@@ -193,3 +193,68 @@ def test_convex_ring_accepts_collinear_vertices_and_refuses_dents_and_holes():
     hole = [(3.3506488814064777, 3.324870928249579), (3.3829327123116366, 3.3760437365656712),
             (3.3859556977471463, 3.3914704625655396)]
     assert convex_ring(Polygon([(0, 0), (4, 0), (4, 4), (0, 4)], [hole])) is None
+
+
+def test_union_areas_ray_along_the_wall_of_a_sharp_corner():
+    """A ray along the wall of a 0.0077-rad corner, from outside the room, through a camera
+    on that wall: the shrunk ring's corner must move in along its bisector far enough
+    (delta / sin(half the angle)) that the ray stays outside it; a shrink of delta along
+    the bisector left it within rounding of the walls and counted 12 % of the room twice."""
+    from tasking.fan import UnionAreas, convex_ring
+
+    room = Polygon([(0, 0), (3, 0), (1.3054262745459861, 0.01)])
+    apex = np.array([[-0.6527131372729931, -0.005], [0.5399832442704986, 0.00413645147795343]])
+    cones = (np.arange(2), apex, np.array([-2.425335105150533, -3.133932470399422]),
+             np.array([0.00766018319037132, -1.7466250777501744]))  # camera 0 covers it all
+    sets = np.array([[1, 0], [0, 1], [1, 1]], dtype=bool)
+    got = UnionAreas(convex_ring(room), cones, 2, 20.0)(sets)
+    np.testing.assert_allclose(got[[0, 2]], [0.015, 0.015], rtol=0, atol=1e-9 * room.area)
+    np.testing.assert_allclose(got[1], _union_reference(room, cones, sets[1:2], 20.0)[0],
+                               rtol=0, atol=1e-9 * room.area)
+
+
+def _aimed_cones(rng, v, centre, n):
+    """Cameras on wall lines (at vertices, on walls, beyond them), outside or inside the
+    room, their cone edges aimed at vertices or along walls (70 %) or anywhere."""
+    V = v.shape[0]
+    cam, apx, t0, t1 = [], [], [], []
+    for c in range(n):
+        e = int(rng.integers(V))
+        w = v[(e + 1) % V] - v[e]
+        a = [v[e] + rng.choice([-0.5, 0.0, 0.5, 1.0, 1.5]) * w,
+             v[e] + rng.uniform(0.05, 1.0) * (v[e] - centre),
+             v[e] + rng.uniform(0.1, 0.9) * w,
+             centre + 0.5 * (v[e] - centre)][int(rng.integers(4))]
+        d = v - a
+        aims = [np.arctan2(y, x) for x, y in d[np.hypot(d[:, 0], d[:, 1]) > 1e-9]]
+        aims += [np.arctan2(w[1], w[0]), np.arctan2(-w[1], -w[0])]
+        ang = [rng.choice(aims) if rng.random() < 0.7 else rng.uniform(-np.pi, np.pi)
+               for _ in range(2)]
+        width = np.mod(ang[1] - ang[0], 2 * np.pi)
+        cam.append(c)
+        apx.append(a)
+        t0.append(ang[0])
+        t1.append(ang[0] + (width if width > 1e-6 else rng.uniform(0.1, 3.0)))
+    return split_wide(np.array(cam), np.array(apx), np.array(t0), np.array(t1))
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["box", "hull", "sliver"]))
+def test_union_areas_cone_edges_through_vertices_and_along_walls(seed, shape):
+    from tasking.fan import UnionAreas, convex_ring
+
+    rng = np.random.default_rng(seed)
+    if shape == "box":
+        room = box(0, 0, 3, 2)
+    elif shape == "hull":
+        room = MultiPoint(rng.uniform(-1, 1, (int(rng.integers(3, 12)), 2))).convex_hull
+        room = room if room.area >= 0.05 else box(-1, -0.7, 1, 0.7)
+    else:  # a thin triangle: sharp corners
+        room = Polygon([(0, 0), (3, 0), (rng.uniform(0.2, 2.2), rng.choice([0.01, 0.1, 1.0]))])
+    ring = convex_ring(room)
+    n = int(rng.integers(1, 7))
+    cones = _aimed_cones(rng, ring[:-1], np.asarray(room.centroid.coords[0]), n)
+    sets = rng.random((4, n)) < 0.6
+    got = UnionAreas(ring, cones, n, 20.0)(sets)
+    want = _union_reference(room, cones, sets, 20.0)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * room.area)
