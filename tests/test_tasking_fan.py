@@ -258,3 +258,37 @@ def test_union_areas_cone_edges_through_vertices_and_along_walls(seed, shape):
     got = UnionAreas(ring, cones, n, 20.0)(sets)
     want = _union_reference(room, cones, sets, 20.0)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * room.area)
+
+
+def test_union_areas_from_outside_a_triangle_seeing_two_walls():
+    # from (1, 3) above the apex of the triangle the near chain (two walls) is longer than
+    # the far one (the base): a cone entering only the second near wall, the left one
+    from tasking.fan import UnionAreas, convex_ring
+
+    room = Polygon([(0, 0), (2, 0), (1, 2)])
+    apex = np.array([[1.0, 3.0], [1.0, 3.0], [1.0, -1.0], [3.0, 3.0], [1.0, 3.0]])
+    t0 = np.array([-np.pi / 2 - 1.0, -np.pi / 2 - 0.2, np.pi / 2 - 1.0, -2.4, -1.85])
+    t1 = np.array([-np.pi / 2 + 1.0, -np.pi / 2 + 0.3, np.pi / 2 + 1.0, -1.8, -1.65])
+    got = UnionAreas(convex_ring(room), (np.arange(5), apex, t0, t1), 5, 20.0)(np.eye(5, dtype=bool))
+    want = [room.intersection(w).area for w in wedge_polygons(apex, t0, t1, 20.0)]
+    np.testing.assert_allclose(want[0], 2.0, rtol=1e-12)  # cameras 0 and 2 see it all
+    np.testing.assert_allclose(want[2], 2.0, rtol=1e-12)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+
+
+def test_union_areas_of_cones_an_ulp_or_two_wide_are_zero():
+    # both rays of such a cone leave the room at one point up to rounding (exit theta1
+    # can come out just before exit theta0 on the same wall): its arc must be empty, not
+    # the whole boundary
+    from tasking.fan import UnionAreas, convex_ring
+
+    rng = np.random.default_rng(0)
+    for room in (box(0, 0, 3, 2), MultiPoint(rng.uniform(-1, 1, (8, 2))).convex_hull):
+        ring, centre = convex_ring(room), np.asarray(room.centroid.coords[0])
+        for _ in range(10):
+            n = 60
+            apex = centre + rng.uniform(-2, 2, (n, 2)) * rng.choice([0.1, 0.3, 3.0], (n, 1))
+            t0 = rng.uniform(-np.pi, np.pi, n)
+            t1 = t0 + rng.integers(1, 3, n) * np.spacing(np.abs(t0))
+            got = UnionAreas(ring, (np.arange(n), apex, t0, t1), n, 20.0)(np.eye(n, dtype=bool))
+            assert np.abs(got).max() < 1e-9 * room.area
