@@ -467,3 +467,38 @@ def test_a_camera_far_outside_the_room_proves_all_of_it_empty(where):
     assert hull.area < 1e-9
     both = visual_hull_of_discs([[0.0, 1.5], where], [0.0, yaw[0]], [0.05, 0.05], np.empty((0, 2)), R, room)
     assert both.area < 1e-9
+
+
+# --- cones.py: hand values of its pieces ------------------------------------------------
+
+
+def test_a_camera_on_a_discs_rim_is_occluded_by_a_half_plane():
+    # at d = r the tangent lines are the rim's tangent: the disc hides a half-plane,
+    # bearing +- pi/2; only a camera strictly inside is blind (+- pi)
+    from tasking.cones import disc_intervals
+
+    lo, hi = disc_intervals(np.array([[0.0, 0.0], [0.0, 0.1]]), np.array([0.0, 0.0]),
+                            np.array([[0.0, 0.5]]), np.array([0.5]))
+    np.testing.assert_allclose([lo[0, 0], hi[0, 0]], [0.0, np.pi], atol=1e-12)
+    np.testing.assert_allclose(hi[1, 0] - lo[1, 0], 2 * np.pi, atol=1e-12)
+
+
+def test_free_intervals_drop_gaps_of_min_gap_and_narrower():
+    from tasking.cones import MIN_GAP, free_intervals
+
+    # gaps between the occlusions and the FOV edge of 0.5 * MIN_GAP, exactly MIN_GAP
+    # (0.0 to 1e-10) and 10 * MIN_GAP
+    lo = np.array([[-1.0 + 0.5 * MIN_GAP, MIN_GAP, 0.5]])
+    hi = np.array([[0.0, 0.5 - 10 * MIN_GAP, 0.9]])
+    cam, a0, a1 = free_intervals(lo, hi, np.array([1.0]))
+    assert cam.tolist() == [0, 0]
+    np.testing.assert_allclose(a0, [0.5 - 10 * MIN_GAP, 0.9], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(a1, [0.5, 1.0], rtol=0, atol=1e-15)
+
+
+def test_wedge_radius_is_twice_the_diagonal_of_the_box_with_the_cameras_plus_one():
+    from tasking.cones import wedge_radius
+
+    assert wedge_radius(box(0, 0, 3, 4), np.array([[0.0, 0.0], [3.0, 1.0]])) == 11.0
+    # a camera outside widens the box to (-3, 0)-(3, 8): diagonal 10
+    assert wedge_radius(box(0, 0, 3, 4), np.array([[-3.0, 8.0]])) == 21.0
