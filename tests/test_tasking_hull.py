@@ -502,3 +502,23 @@ def test_wedge_radius_is_twice_the_diagonal_of_the_box_with_the_cameras_plus_one
     assert wedge_radius(box(0, 0, 3, 4), np.array([[0.0, 0.0], [3.0, 1.0]])) == 11.0
     # a camera outside widens the box to (-3, 0)-(3, 8): diagonal 10
     assert wedge_radius(box(0, 0, 3, 4), np.array([[-3.0, 8.0]])) == 21.0
+
+
+def test_wedge_polygons_with_near_and_far_radii_by_hand():
+    # a quarter wedge from (1, 1), inner 0.5, sight radius 3 beyond the wedge length 2:
+    # the far arc is at 2; ARC_POINTS on each arc, the inner arc at 0.5 / cos(step / 2)
+    from tasking.cones import ARC_POINTS, wedge_polygons
+
+    (w,) = wedge_polygons(np.array([[1.0, 1.0]]), np.array([0.0]), np.array([np.pi / 2]), 2.0,
+                          inner=np.array([0.5]), outer=np.array([3.0]))
+    xy = np.asarray(w.exterior.coords)
+    assert xy.shape == (2 * ARC_POINTS + 1, 2)
+    ang = np.linspace(0.0, np.pi / 2, ARC_POINTS)
+    r_in = 0.5 / np.cos(np.pi / 4 / (ARC_POINTS - 1))
+    want = np.r_[np.c_[np.cos(ang), np.sin(ang)] * 2.0, np.c_[np.cos(ang), np.sin(ang)][::-1] * r_in,
+                 [[2.0, 0.0]]] + 1.0
+    np.testing.assert_allclose(xy, want, atol=1e-12)
+    # both arcs' chords: (n - 1) isosceles triangles of apex angle step, out minus in
+    step = np.pi / 2 / (ARC_POINTS - 1)
+    area = 0.5 * (ARC_POINTS - 1) * np.sin(step) * (2.0**2 - r_in**2)
+    assert abs(w.area - area) < 1e-12
