@@ -13,6 +13,7 @@ from tasking import (
     camera_regions_from_scanlines,
     empty_regions_from_discs,
     free_wedges_from_discs,
+    free_wedges_from_scanlines,
     hull_from_wedges,
     polygon_centres,
     prune_small,
@@ -522,3 +523,23 @@ def test_wedge_polygons_with_near_and_far_radii_by_hand():
     step = np.pi / 2 / (ARC_POINTS - 1)
     area = 0.5 * (ARC_POINTS - 1) * np.sin(step) * (2.0**2 - r_in**2)
     assert abs(w.area - area) < 1e-12
+
+
+def test_prune_small_keeps_min_area_itself_and_drops_zero_area_and_finds_nested_parts():
+    from shapely.geometry import MultiPolygon
+
+    # a part of exactly min_area stays (>=); a zero-area polygon goes even at min_area 0
+    kept = prune_small(MultiPolygon([box(0, 0, 1, 1), box(2, 0, 2.5, 1)]), 0.5)
+    assert sorted(p.area for p in kept) == [0.5, 1.0]
+    flat = Polygon([(0, 0), (1, 0), (2, 0)])
+    assert [p.area for p in prune_small(GeometryCollection([box(0, 0, 1, 1), flat]), 0.0)] == [1.0]
+    # a MultiPolygon two collections deep
+    nested = GeometryCollection([GeometryCollection([MultiPolygon([box(0, 0, 1, 1), box(2, 0, 3, 2)])])])
+    assert sorted(p.area for p in prune_small(nested, 0.1)) == [1.0, 2.0]
+
+
+def test_scanline_columns_spanning_exactly_two_pi_are_refused():
+    # four columns a quarter turn apart: their edges span exactly 2*pi
+    bearings = np.array([[0.0, 0.5, 1.0, 1.5]]) * np.pi
+    with pytest.raises(ValueError, match=r"span less than 2\*pi"):
+        free_wedges_from_scanlines(np.zeros((1, 2)), bearings, np.zeros((1, 4), bool), box(-1, -1, 1, 1))
