@@ -543,3 +543,10 @@ def test_scanline_columns_spanning_exactly_two_pi_are_refused():
     bearings = np.array([[0.0, 0.5, 1.0, 1.5]]) * np.pi
     with pytest.raises(ValueError, match=r"span less than 2\*pi"):
         free_wedges_from_scanlines(np.zeros((1, 2)), bearings, np.zeros((1, 4), bool), box(-1, -1, 1, 1))
+
+
+def test_non_monotone_bearings_name_the_first_bad_row():
+    bearings = np.array([[0.0, 0.1, 0.2], [0.0, 0.2, 0.1], [0.3, 0.1, 0.2]])
+    with pytest.raises(ValueError, match=r"strictly monotone along each row \(row 1\)"):
+        free_wedges_from_scanlines(np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0]]), bearings,
+                                   np.zeros((3, 3), bool), box(-1, -1, 1, 1))
