@@ -85,3 +85,48 @@ def test_degrade_builds_the_pool_of_its_noise_std_for_one_camera():
     assert np.array_equal(built, given_pool)
     gain_only = degrade(rgb.copy(), 0.0, 0.02, np.random.default_rng(3))
     assert not np.array_equal(built, gain_only)
+
+
+def test_sense_rounds_the_gain_product_without_offset():
+    """A gain alone: saturate(src * gain), whole products staying whole (1 * 3, 3 * 3, 85 * 3 = 255)."""
+    src = np.array([[1, 3, 85, 86]], np.uint8)
+    dst = np.zeros_like(src)
+    sense(dst, src, 3.0, None)
+    assert dst.tolist() == [[3, 9, 255, 255]]
+
+
+def test_offsets_are_uniform_over_every_window_of_the_pool_after_the_gains():
+    """Offsets 0..POOL_EXTRA inclusive (the pool holds POOL_EXTRA + 1 windows of one frame), drawn
+    after the n gains from the same stream."""
+    n = 100_000
+    _, o = draw_gains_offsets(n, 0.1, np.random.default_rng(11))
+    rng = np.random.default_rng(11)
+    rng.standard_normal(n)
+    assert np.array_equal(o, rng.integers(0, POOL_EXTRA + 1, n))
+
+
+@pytest.mark.parametrize("rng", [0, np.random.RandomState(0), None])
+def test_gains_want_a_generator(rng):
+    with pytest.raises(ValueError, match="rng: expected an np.random.Generator"):
+        draw_gains_offsets(2, 0.1, rng)
+    with pytest.raises(ValueError, match="rng"):
+        degrade(np.zeros((2, 3, 4, 3), np.uint8), 2.0, 0.1, rng)
+
+
+def test_degrade_without_noise_ignores_a_given_pool_and_builds_none(monkeypatch):
+    """noise_std 0: the gain alone, even with a pool at hand, and no pool is built."""
+    import render.noise
+
+    rgb = np.random.default_rng(6).integers(0, 256, (2, 3, 4, 3), dtype=np.uint8)
+    gains, _ = draw_gains_offsets(2, 0.2, np.random.default_rng(8))
+    expected = np.clip(np.rint(rgb * gains[:, None, None, None]), 0, 255)
+    pool = np.full(36 + POOL_EXTRA, BIAS + 50, np.uint8)           # +50 everywhere, if it were used
+    out = degrade(rgb.copy(), 0.0, 0.2, np.random.default_rng(8), pool=pool)
+    np.testing.assert_allclose(out, expected, atol=1)
+
+    def no_pool(*args):
+        raise AssertionError("noise_pool built for noise_std 0")
+
+    monkeypatch.setattr(render.noise, "noise_pool", no_pool)
+    out = degrade(rgb.copy(), 0.0, 0.2, np.random.default_rng(8))
+    np.testing.assert_allclose(out, expected, atol=1)
