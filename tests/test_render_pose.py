@@ -157,3 +157,21 @@ def test_the_default_clipping_planes_are_5_cm_and_50_m():
     ndc_z = clip[:, 2] / clip[:, 3]
     np.testing.assert_allclose(ndc_z[:2], [-1.0, 1.0], atol=1e-12)
     assert -1.0 < ndc_z[2] < 1.0
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: opencv_to_opengl_pose(np.eye(3)[:2], np.zeros(3)), r"R: expected shape \(3, 3\), got \(2, 3\)"),
+    (lambda: opencv_to_opengl_pose(np.eye(3), [0.0, np.nan, 0.0]), "t: expected finite numbers"),
+    (lambda: view_matrix(np.eye(4), np.zeros(3)), r"R: expected shape \(3, 3\), got \(4, 4\)"),
+    (lambda: view_matrix(np.eye(3), np.zeros(4)), r"t: expected shape \(3,\), got \(4,\)"),
+    (lambda: projection_matrix([[500, 0, "320"], [0, 500, 240], [0, 0, 1]], 640, 480), "K: expected numbers"),
+    (lambda: projection_matrix(np.eye(3)[:, :2], 640, 480), r"K: expected shape \(3, 3\)"),
+    (lambda: project_opengl(np.zeros((4, 2)), np.eye(3), np.zeros(3), np.eye(3), 8, 8),
+     r"points_world: expected shape \(n, 3\), got \(4, 2\)"),
+    (lambda: project_opengl([[0.0, 0.0, np.inf]], np.eye(3), np.zeros(3), np.eye(3), 8, 8),
+     "points_world: expected finite numbers"),
+    (lambda: project_opengl(np.ones((1, 3)), np.eye(3), [0.0, 0.0, np.nan], np.eye(3), 8, 8), "t: expected finite"),
+])
+def test_bad_matrices_are_named(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
