@@ -155,3 +155,45 @@ def test_camera_numbers_name_the_cameras_that_exist():
         check_camera_numbers("x", [17], range(1, 17))
     with pytest.raises(ValueError, match=r"among 1, 5, 9, got \[2\]$"):       # a renderer for 1, 5 and 9
         check_camera_numbers("cameras", [2], (1, 5, 9))
+
+
+def _one_camera_room(position, yaw_deg, count=1):
+    return Scene.from_text(f"""
+name: long_room
+room: {{shape: rectangle, width: 40.0, depth: 4.0, height: 3.0}}
+cameras:
+  intrinsics: {{resolution: [160, 120], hfov_deg: 30.0, distortion: [0, 0, 0, 0, 0]}}
+  poses:
+    - {{number: 1, position: {list(position)}, yaw_deg: {yaw_deg}, pitch_deg: 0.0}}
+people: {{count: {count}, radius: 0.5, height: 1.8}}
+""")
+
+
+@pytest.mark.parametrize("position, yaw, count, corner", [
+    ([39.95, 0.5, 2.9], 180.0, 1, [-0.5, 4.5, 0.0]),      # the room widened by the people's radius
+    ([0.05, 3.5, 0.1], 0.0, 1, [40.5, -0.5, 3.0]),        # the other way round, up to the ceiling
+    ([39.95, 0.5, 2.9], 180.0, 0, [0.0, 4.0, 0.0]),       # nobody: the room's own corner
+])
+def test_far_plane_is_twice_the_distance_to_the_farthest_corner_by_hand(position, yaw, count, corner):
+    from render.renderer import far_plane
+
+    expected = 2.0 * np.linalg.norm(np.subtract(corner, position))
+    assert expected > 50.0
+    assert far_plane(_one_camera_room(position, yaw, count)) == pytest.approx(expected, rel=1e-12)
+
+
+def test_camera_numbers_are_checked_and_returned_as_ints():
+    from render.renderer import check_camera_numbers
+
+    assert check_camera_numbers("cameras", None, (1, 5, 9)) == (1, 5, 9)
+    got = check_camera_numbers("cameras", np.array([9, 1]), (1, 5, 9))
+    assert got == (9, 1) and all(type(n) is int for n in got)
+    assert check_camera_numbers("cameras", [5.0], (1, 5, 9)) == (5,)
+    with pytest.raises(ValueError, match=r"^cameras: expected distinct camera numbers among 1, 5, 9, got \[5, 5\]$"):
+        check_camera_numbers("cameras", [5, 5], (1, 5, 9))
+    with pytest.raises(ValueError, match=r"^cameras: expected distinct camera numbers among 1\.\.3, got \[\]$"):
+        check_camera_numbers("cameras", [], range(1, 4))
+    with pytest.raises(ValueError, match=r"^cameras: expected camera numbers, got 'x'$"):
+        check_camera_numbers("cameras", "x", range(1, 4))
+    with pytest.raises(ValueError, match=r"^cameras: expected camera numbers, got 3$"):
+        check_camera_numbers("cameras", 3, range(1, 4))
