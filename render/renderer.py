@@ -86,8 +86,8 @@ def check_camera_numbers(name: str, numbers, available) -> tuple[int, ...]:
     if numbers is None:
         return available
     try:
-        numbers = tuple(int(n) for n in numbers)
-    except (TypeError, ValueError):
+        numbers = tuple(_whole_number(n) for n in numbers)
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name}: expected camera numbers, got {numbers!r}") from None
     bad = [n for n in numbers if n not in available]
     if bad or not numbers or len(set(numbers)) != len(numbers):
@@ -95,6 +95,13 @@ def check_camera_numbers(name: str, numbers, available) -> tuple[int, ...]:
         among = f"{available[0]}..{available[-1]}" if run else ", ".join(map(str, available))
         raise ValueError(f"{name}: expected distinct camera numbers among {among}, got {list(numbers)}")
     return numbers
+
+
+def _whole_number(n) -> int:
+    """``n`` as an int if it is a whole number (5, 5.0, np.int64(5)); ValueError for 5.5, True, "5"."""
+    if isinstance(n, (bool, np.bool_, str, bytes)) or int(n) != n:
+        raise ValueError(n)
+    return int(n)
 
 
 class Renderer:

@@ -197,3 +197,14 @@ def test_camera_numbers_are_checked_and_returned_as_ints():
         check_camera_numbers("cameras", "x", range(1, 4))
     with pytest.raises(ValueError, match=r"^cameras: expected camera numbers, got 3$"):
         check_camera_numbers("cameras", 3, range(1, 4))
+
+
+@pytest.mark.parametrize("numbers, shown", [([2.5], r"\[2\.5\]"), ([True], r"\[True\]"), (["3"], r"\['3'\]"),
+                                            ([1, np.float64(1.5)], r"1\.5"), ([np.inf], r"\[inf\]"),
+                                            ([np.nan], r"\[nan\]")])
+def test_camera_numbers_that_are_not_whole_numbers_are_refused(numbers, shown):
+    """Camera 2.5, True or "3" used to become camera 2, 1 or 3 without a word."""
+    from render.renderer import check_camera_numbers
+
+    with pytest.raises(ValueError, match=rf"^cameras: expected camera numbers, got .*{shown}"):
+        check_camera_numbers("cameras", numbers, range(1, 17))
