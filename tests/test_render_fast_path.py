@@ -159,3 +159,89 @@ def test_pool_offsets_and_gains_come_from_the_rng():
     assert o1.min() >= 0 and o1.max() <= POOL_EXTRA
     with pytest.raises(ValueError, match="rng"):
         draw_gains_offsets(2, 0.02, 5)
+
+
+def _expected_rects(lab, r, positions):
+    """Per camera and person, the box of the person's mesh vertices projected by cv2.projectPoints
+    on the ideal canvas, floor/ceil + 2 px, sides on the canvas edge at infinity; NaN hidden,
+    behind the near plane or off the canvas; the whole canvas straddling the near plane."""
+    import cv2
+
+    from render.geometry import people_mesh
+    from render.renderer import ZNEAR
+
+    cw, ch = r.canvas_size
+    mesh = people_mesh(lab.people)
+    out = np.full((len(r.numbers), lab.people.count, 4), np.nan)
+    for k, cam in enumerate(r.cameras):
+        Kc = r.maps[r.map_index[k]].canvas_K(cam.K)
+        for p, xy in enumerate(positions):
+            if np.isnan(xy).any():
+                continue
+            world = mesh.positions[mesh.person == p].astype(float) + [xy[0], xy[1], 0.0]
+            z = (cam.R @ world.T + cam.t.reshape(3, 1))[2]
+            if np.all(z < 0.999 * ZNEAR):
+                continue
+            if not np.all(z > 1.001 * ZNEAR):
+                out[k, p] = [-np.inf, -np.inf, np.inf, np.inf]
+                continue
+            uv = cv2.projectPoints(world, cv2.Rodrigues(cam.R)[0], cam.t, Kc, None)[0].reshape(-1, 2)
+            lo, hi = np.floor(uv.min(axis=0)) - 2, np.ceil(uv.max(axis=0)) + 2
+            if hi[0] < 0 or hi[1] < 0 or lo[0] > cw - 1 or lo[1] > ch - 1:
+                continue
+            out[k, p] = [-np.inf if lo[0] <= 0 else lo[0], -np.inf if lo[1] <= 0 else lo[1],
+                         np.inf if hi[0] >= cw - 1 else hi[0], np.inf if hi[1] >= ch - 1 else hi[1]]
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_people_boxes_are_the_projected_vertices_plus_two_pixels_and_hold_every_label(lab, lab_renderer, seed):
+    """The canvas boxes of ``_rects`` against cv2.projectPoints of the mesh, and every pixel a
+    person covers in the whole-scene draw inside that person's box."""
+    from render.renderer import _boxes
+
+    r = lab_renderer
+    cam = lab.cameras[0]
+    centre = cam.center_world
+    side = cam.R[0, :2] / np.linalg.norm(cam.R[0, :2])           # camera 1's right, on the floor
+    ahead = cam.R[2, :2] / np.linalg.norm(cam.R[2, :2])
+    rng = np.random.default_rng(seed)
+    positions = _random_positions(lab, rng, lab.people.radius + 0.01)
+    if seed == 1:
+        positions[0] = centre[:2] + 0.6 * side                   # beside camera 1: across its near plane
+        positions[1] = centre[:2] - 1.0 * ahead                  # behind camera 1
+    else:
+        positions[2, 0] = np.nan                                 # half a NaN row hides the person too
+    idx = np.arange(len(r.numbers))
+    assert not r._close(idx, positions).any()
+    rects = r._rects(idx, positions)
+    expected = _expected_rects(lab, r, positions)
+    np.testing.assert_array_equal(np.isnan(rects), np.isnan(expected))
+    np.testing.assert_allclose(rects[~np.isnan(rects)], expected[~np.isnan(expected)], atol=0)
+    assert np.isnan(rects).any() and np.isinf(rects).any() and np.isfinite(rects).any()
+    if seed == 1:
+        assert rects[0, 0].tolist() == [-np.inf, -np.inf, np.inf, np.inf] and np.isnan(rects[0, 1]).all()
+    labels = r.raster.draw(r.view_projs, positions, bands=idx)[..., 3]
+    for k in idx:
+        for p in range(lab.people.count):
+            inside = np.zeros(labels.shape[1:], bool)
+            for x0, y0, x1, y1 in _boxes(rects[k, p:p + 1], r.canvas_size):
+                inside[y0:y1, x0:x1] = True
+            assert not np.any((labels[k] == p + 1) & ~inside), (k, p)
+
+
+def test_boxes_are_the_end_exclusive_slices_of_the_rects_on_the_canvas():
+    """Inclusive float bounds to integer slices on an 8x6 canvas, by hand: infinite sides at the
+    edges, NaN rows and rects off the canvas (or empty on it) left out."""
+    from render.renderer import _boxes
+
+    inf, nan = np.inf, np.nan
+    rects = np.array([[2.0, 3.0, 5.0, 7.0],          # rows 3..7 -> 3..5 on the canvas
+                      [-inf, -inf, inf, inf],        # the whole canvas
+                      [nan, nan, nan, nan],          # hidden
+                      [10.0, 1.0, 12.0, 2.0],        # right of the canvas
+                      [1.0, 7.0, 3.0, 9.0],          # below it
+                      [-3.0, -5.0, -1.0, 2.0],       # left of it
+                      [0.0, 5.0, 7.0, 5.0]])         # its last row, whole width
+    assert _boxes(rects, (8, 6)) == [(2, 3, 6, 6), (0, 0, 8, 6), (0, 5, 8, 6)]
+    assert _boxes(rects[2:4], (8, 6)) == []
