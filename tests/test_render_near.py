@@ -123,3 +123,39 @@ def test_a_surface_through_a_lens_stays_in_that_cameras_image():
         alone = r.render(people, cameras=[4], clean=True).labels
     np.testing.assert_array_equal(both[1], alone[0])
     assert not (both[1] == 1).any()                       # camera 4 cannot see person 0
+
+
+def _near_plane_reach(r, k):
+    """Distance from camera k's lens to the farthest corner of its near plane on the canvas, metres."""
+    from render.renderer import ZNEAR
+
+    cw, ch = r.canvas_size
+    Kc = r.maps[r.map_index[k]].canvas_K(r.cameras[k].K)
+    corners = np.array([[-0.5, -0.5, 1.0], [cw - 0.5, -0.5, 1.0], [-0.5, ch - 0.5, 1.0], [cw - 0.5, ch - 0.5, 1.0]])
+    return max(np.linalg.norm(ZNEAR * np.linalg.solve(Kc, c)) for c in corners)
+
+
+def test_close_means_the_cylinder_within_the_near_planes_reach_of_the_lens(low, lab, lab_renderer):
+    scene, r = low
+    reach = _near_plane_reach(r, 1)          # camera 3, 1 m high, below the heads; its canvas corner (-0.5, ch - 0.5)
+    assert 0.055 < reach < 0.07
+    lens = np.array(LOW[:2])
+    away = np.array([np.cos(0.3), np.sin(0.3)])                  # any side: the cylinder is round
+    for gap, close in [(0.9998 * reach, True), (1.0002 * reach, False), (-0.1, True)]:
+        pos = (lens + (scene.people.radius + gap) * away)[None]
+        assert r._close(np.array([1]), pos).tolist() == [[close]], gap
+    assert r._close(np.arange(3), np.array([INSIDE[:2]])).tolist() == [[True], [False], [False]]
+    assert r._close(np.arange(3), np.array([[np.nan, np.nan]])).tolist() == [[False]] * 3
+    # a lab camera, 2.2 m high, right above a person 1.75 m tall: 45 cm over the head
+    above = lab.cameras[0].center_world[:2][None]
+    three = np.vstack([above, [[3.0, 3.0], [4.0, 4.0]]])
+    assert not lab_renderer._close(np.arange(16), three).any()
+
+
+def test_one_person_covering_the_lens_is_drawn_unclipped_beside_others():
+    """The camera inside person 0 sees only person 0, also when person 1 stands elsewhere."""
+    from render import Renderer
+
+    with Renderer(_scene(count=2), cameras=[3]) as r:
+        labels = r.labels(np.array([[3.905, 0.27], [2.0, 4.0]]))
+    assert (labels == 1).all()
