@@ -220,7 +220,7 @@ class Renderer:
     def _render(self, positions_xy, idx: np.ndarray, rng, clean: bool, colour: bool):
         """(rgb (n, H, W, 3) uint8 or None without ``colour``, labels (n, H, W) uint8) of cameras ``idx``."""
         count = self.scene.people.count
-        pos = np.asarray(positions_xy, float).reshape(-1, 2) if count else np.zeros((0, 2))
+        pos = np.asarray(positions_xy, float) if count else np.zeros((0, 2))
         if pos.shape != (count, 2):
             raise ValueError(f"positions_xy: expected shape ({count}, 2), got {np.shape(positions_xy)}")
         background = self._background_frames()

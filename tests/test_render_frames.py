@@ -1,6 +1,8 @@
 """Rendered frames: labels agree with cv2.projectPoints silhouettes, seeded noise, backgrounds;
 the rasteriser itself on hand-made triangles (labels, depth ties, near cameras, bands, boxes)."""
 
+import re
+
 import cv2
 import numpy as np
 import pytest
@@ -295,3 +297,37 @@ def test_raster_checks_its_arguments():
     finally:
         r.close()
     r.close()                                                      # twice: nothing left to free
+
+
+def test_positions_of_another_shape_are_refused_not_reshaped(lab_renderer, three_people):
+    """(2, 3) - the x row and the y row - or a flat (6,) used to be read as three (x, y) pairs."""
+    for wrong in (three_people.T.copy(), three_people.ravel(), three_people[None]):
+        with pytest.raises(ValueError, match=rf"^positions_xy: expected shape \(3, 2\), got {re.escape(str(wrong.shape))}$"):
+            lab_renderer.render(wrong, clean=True)
+        with pytest.raises(ValueError, match=r"^positions_xy: expected shape \(3, 2\)"):
+            lab_renderer.labels(wrong)
+
+
+def test_noisy_frames_without_an_rng_say_how_to_get_clean_ones(lab_renderer, three_people):
+    with pytest.raises(ValueError, match=r"^rng: expected an np\.random\.Generator \(or clean=True"):
+        lab_renderer.render(three_people)
+
+
+def test_cameras_come_in_the_order_asked(lab_renderer, three_people):
+    both = lab_renderer.render(three_people, cameras=[9, 2], clean=True)
+    assert both.cameras == (9, 2)
+    for k, n in enumerate((9, 2)):
+        alone = lab_renderer.render(three_people, cameras=[n], clean=True)
+        assert alone.cameras == (n,)
+        assert np.array_equal(both.rgb[k], alone.rgb[0]) and np.array_equal(both.labels[k], alone.labels[0])
+    assert np.array_equal(lab_renderer.labels(three_people, cameras=[9, 2]), both.labels)
+    assert lab_renderer.background(cameras=[9, 2]).cameras == (9, 2)
+    assert np.array_equal(lab_renderer.background(cameras=[9, 2]).rgb, lab_renderer.background().rgb[[8, 1]])
+
+
+def test_a_scene_of_floor_plane_cameras_is_not_rendered():
+    from render import Renderer
+    from scene import load_scene
+
+    with pytest.raises(ValueError, match=r"^scene: 'circle' has floor-plane cameras only; rendering needs calibrated"):
+        Renderer(load_scene("circle"))
