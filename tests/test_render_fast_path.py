@@ -245,3 +245,22 @@ def test_boxes_are_the_end_exclusive_slices_of_the_rects_on_the_canvas():
                       [0.0, 5.0, 7.0, 5.0]])         # its last row, whole width
     assert _boxes(rects, (8, 6)) == [(2, 3, 6, 6), (0, 0, 8, 6), (0, 5, 8, 6)]
     assert _boxes(rects[2:4], (8, 6)) == []
+
+
+def test_frames_without_noise_still_take_the_gain(three_people):
+    """noise_std 0, gain_jitter 0.2: each camera's clean frame times its gain, no noise."""
+    from render import Renderer
+    from scene import Scene, scene_path
+
+    text = scene_path("lab").read_text().replace("noise_std: 2.0 ", "noise_std: 0.0 ").replace(
+        "gain_jitter: 0.02 ", "gain_jitter: 0.2 ")
+    scene = Scene.from_text(text)
+    assert scene.render.noise_std == 0.0 and scene.render.gain_jitter == 0.2
+    with Renderer(scene, cameras=[1, 6]) as r:
+        f = r.render(three_people, rng=np.random.default_rng(5))
+        clean = r.render(three_people, clean=True).rgb
+    gains = 1.0 + 0.2 * np.random.default_rng(5).standard_normal(2)
+    assert np.abs(gains - 1).min() > 0.01
+    expected = np.clip(np.rint(clean * gains[:, None, None, None]), 0, 255)
+    np.testing.assert_allclose(f.rgb, expected, atol=1)              # round(x.5) either way
+    assert np.mean(f.rgb == expected) > 0.99
