@@ -1031,3 +1031,35 @@ def test_the_column_threshold_is_checked_against_the_cameras_rendered(tmp_path, 
     assert (code, line) == (2, ("camtask render: error: --params: column_threshold 600 "
                                "exceeds the 552 pixels of a rectified column; every scanline would be empty"))
     assert not (tmp_path / "ds").exists()
+
+
+@pytest.mark.parametrize(("top", "entry", "problem"), [
+    ({"episodes_planned": 0, "episode_layout": 1}, {}, None),                # the least of each is fine
+    ({"episodes_planned": -1}, {}, "episodes_planned is -1, expected an integer >= 0"),
+    ({"episode_layout": 0}, {}, "episode_layout is 0, expected an integer >= 1"),
+    ({"episodes_planned": True}, {}, "episodes_planned is True, expected an integer >= 0"),
+    ({}, {"index": False}, "episodes[0] lacks an integer index and frames, a name or a files mapping"),
+    ({}, {"frames": True}, "episodes[0] lacks an integer index and frames, a name or a files mapping"),
+])
+def test_a_manifests_counts_are_integers_from_their_least(tmp_path, top, entry, problem):
+    """JSON's true and false are no counts (Python takes them for 1 and 0), and the least
+    planned count (0) and layout (1) are manifests of their own."""
+    from testbed.generate import read_manifest
+
+    first = {"index": 0, "name": "episode_0000", "frames": 2, "files": {}} | entry
+    m = {"episodes": [first]} | top
+    (tmp_path / "manifest.json").write_text(json.dumps(m))
+    if problem is None:
+        assert read_manifest(tmp_path) == m
+    else:
+        with pytest.raises(ValueError) as err:
+            read_manifest(tmp_path)
+        assert str(err.value) == f"cannot read {tmp_path / 'manifest.json'} (not a camtask manifest: {problem})"
+
+
+def test_problems_text_names_only_the_kinds_of_problem_found():
+    from testbed.generate import problems_text
+
+    problems = {"missing": [], "changed": ["b.png", "c.png"], "extra": ["d", "e", "f", "g"]}
+    assert problems_text(problems) == "2 changed (b.png, c.png); 4 extra (d, e, f and 1 more)"
+    assert problems_text({"missing": [], "changed": [], "extra": []}) == ""
