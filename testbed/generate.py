@@ -366,14 +366,21 @@ def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool
 def check_episode_names_free(out: Path, keep: dict[int, dict], episodes: int) -> None:
     """Refuse (FileExistsError, before any work) a file or link of ``out`` named as an
     episode still to render: a run makes only folders there, so it is not removed as left
-    behind (:func:`unlisted`), and the finished episode could not be renamed onto it."""
-    for i in range(episodes):
-        path = Path(out) / episode_name(i)
-        if i not in keep and os.path.lexists(path):
-            kind = "a link" if path.is_symlink() else "a folder that could not be deleted" if path.is_dir() \
-                else "a file"
-            raise FileExistsError(f"--resume: {path} is {kind}, not an episode folder, and episode {i} is to be "
-                                  "written there: move it away")
+    behind (:func:`unlisted`), and the finished episode could not be renamed onto it.
+    The names looked at are the folder's, not every episode's: ``--episodes`` may be large."""
+    taken = []
+    for p in Path(out).iterdir():
+        if (number := re.fullmatch(r"episode_(\d{4,})", p.name)) is None:
+            continue
+        i = int(number.group(1))
+        if i < episodes and i not in keep and p.name == episode_name(i):
+            taken.append((i, p))
+    if taken:
+        i, path = min(taken)
+        kind = "a link" if path.is_symlink() else "a folder that could not be deleted" if path.is_dir() \
+            else "a file"
+        raise FileExistsError(f"--resume: {path} is {kind}, not an episode folder, and episode {i} is to be "
+                              "written there: move it away")
 
 
 @contextlib.contextmanager

@@ -1063,3 +1063,23 @@ def test_problems_text_names_only_the_kinds_of_problem_found():
     problems = {"missing": [], "changed": ["b.png", "c.png"], "extra": ["d", "e", "f", "g"]}
     assert problems_text(problems) == "2 changed (b.png, c.png); 4 extra (d, e, f and 1 more)"
     assert problems_text({"missing": [], "changed": [], "extra": []}) == ""
+
+
+@pytest.mark.timeout(60)
+def test_resume_with_very_many_episodes_checks_the_folders_names_not_every_episodes(tmp_path):
+    """--resume --episodes 10**9 looked for a file named as each episode still to render
+    (~15 s a million here) before any work; the folder's own names are what can be in the way."""
+    from testbed.generate import check_episode_names_free
+
+    (tmp_path / "episode_0000").mkdir()
+    for name in ("episode_00003", "episode_best.yaml", "notes.txt"):     # not an episode's name
+        (tmp_path / name).write_text("mine")
+    check_episode_names_free(tmp_path, {0: {}}, 10**12)
+    (tmp_path / "episode_12345").write_text("mine")
+    (tmp_path / "episode_0021").symlink_to(tmp_path / "notes.txt")
+    check_episode_names_free(tmp_path, {0: {}}, 21)     # both beyond the episodes to render
+    with pytest.raises(FileExistsError) as err:
+        check_episode_names_free(tmp_path, {0: {}}, 10**12)
+    assert str(err.value) == (f"--resume: {tmp_path / 'episode_0021'} is a link, not an episode folder, and "
+                              "episode 21 is to be written there: move it away")
+    check_episode_names_free(tmp_path, {0: {}, 21: {}, 12345: {}}, 10**12)
