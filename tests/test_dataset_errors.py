@@ -1083,3 +1083,18 @@ def test_resume_with_very_many_episodes_checks_the_folders_names_not_every_episo
     assert str(err.value) == (f"--resume: {tmp_path / 'episode_0021'} is a link, not an episode folder, and "
                               "episode 21 is to be written there: move it away")
     check_episode_names_free(tmp_path, {0: {}, 21: {}, 12345: {}}, 10**12)
+
+
+def test_exactly_the_room_needed_is_enough(tmp_path, monkeypatch):
+    import collections
+
+    from testbed import generate
+
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(generate.shutil, "disk_usage", lambda path: usage(10**12, 0, 7_000_000))
+    generate.check_space(tmp_path, 7_000_000, "one episode")
+    generate.check_space(tmp_path, 9_000_000, "one episode", freed=2_000_000)
+    with pytest.raises(ValueError) as err:
+        generate.check_space(tmp_path, 9_000_001, "one episode", freed=2_000_000)
+    assert str(err.value) == (f"--out: 7 MB free on {tmp_path} (and 2 MB that --overwrite would free); "
+                              "one episode needs about 9 MB")
