@@ -292,12 +292,16 @@ def check_space(out: Path, need: int, what: str, freed: int = 0) -> None:
 
 
 def size_text(n: float) -> str:
-    """Bytes for messages, three significant digits, powers of 1000.
+    """Bytes for messages, three significant digits, powers of 1000 (MB, GB, TB), in the
+    largest unit of which there is at least one once rounded (never ``1e+03 MB``).
 
-    >>> size_text(68_164_317), size_text(8.8e9), size_text(1_658_880)
-    ('68.2 MB', '8.8 GB', '1.66 MB')
+    >>> size_text(68_164_317), size_text(8.8e9), size_text(1_658_880), size_text(999_600_000)
+    ('68.2 MB', '8.8 GB', '1.66 MB', '1 GB')
     """
-    return f"{n / 1e9:.3g} GB" if n >= 1e9 else f"{n / 1e6:.3g} MB"
+    for scale, unit in ((1e12, "TB"), (1e9, "GB")):
+        if float(f"{n / scale:.3g}") >= 1:
+            return f"{n / scale:.3g} {unit}"
+    return f"{n / 1e6:.3g} MB"
 
 
 def prepare_output(out: Path, config: EpisodeConfig, episodes: int, resume: bool, overwrite: bool,

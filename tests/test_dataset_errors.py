@@ -1098,3 +1098,14 @@ def test_exactly_the_room_needed_is_enough(tmp_path, monkeypatch):
         generate.check_space(tmp_path, 9_000_001, "one episode", freed=2_000_000)
     assert str(err.value) == (f"--out: 7 MB free on {tmp_path} (and 2 MB that --overwrite would free); "
                               "one episode needs about 9 MB")
+
+
+@pytest.mark.parametrize(("n", "text"), [
+    (1e9, "1 GB"), (999_600_000, "1 GB"), (999_400_000, "999 MB"), (1_500_000, "1.5 MB"),
+    (1.5e12, "1.5 TB"), (999.7e9, "1 TB"), (12_345_678_901, "12.3 GB")])
+def test_sizes_are_three_digits_without_an_exponent(n, text):
+    """A disk of 1.5 TB free was "1.5e+03 GB free", 999.6 MB "1e+03 MB" (three significant
+    digits of 1000 or more)."""
+    from testbed.generate import size_text
+
+    assert size_text(n) == text
