@@ -1109,3 +1109,46 @@ def test_sizes_are_three_digits_without_an_exponent(n, text):
     from testbed.generate import size_text
 
     assert size_text(n) == text
+
+
+def test_frames_in_progress_counts_the_first_cameras_masks_of_each_temporary_episode(tmp_path):
+    from testbed.generate import frames_in_progress
+
+    def frames(folder, cams):
+        for cam, n in cams.items():
+            (tmp_path / folder / "masks" / cam).mkdir(parents=True)
+            for f in range(n):
+                (tmp_path / folder / "masks" / cam / f"{f:06d}.png").write_bytes(b"")
+
+    frames(".episode_0003.a1b2.tmp", {"cam02": 4, "cam05": 3, "cam11": 1})    # cam02 runs ahead
+    frames(".episode_0012.c3.tmp", {"cam01": 2})
+    frames(".episode_0013.d4.tmp", {})                                        # no masks yet
+    (tmp_path / ".episode_0014.e5.tmp").mkdir()                               # no masks folder yet
+    frames("episode_0001", {"cam01": 9})                                      # finished: not in progress
+    frames(".episode_x.f6.tmp", {"cam01": 9})                                 # not a run's
+    assert frames_in_progress(tmp_path) == {3: 4, 12: 2}
+
+
+@pytest.mark.parametrize(("text", "runs"), [
+    (None, []),
+    ("{bad", []),
+    ("[1, 2]", []),
+    ('{"host": "c", "earlier_runs": [{"host": "a"}, {"host": "b"}]}', [{"host": "a"}, {"host": "b"}, {"host": "c"}]),
+    ('{"host": "c", "earlier_runs": "lost"}', [{"host": "c"}]),
+])
+def test_earlier_runs_are_the_records_of_run_info_oldest_first(tmp_path, text, runs):
+    from testbed.generate import earlier_runs
+
+    if text is not None:
+        (tmp_path / "run_info.json").write_text(text)
+    assert earlier_runs(tmp_path) == runs
+
+
+def test_version_changes_name_only_the_packages_that_make_the_bytes():
+    from testbed.generate import version_changes
+
+    a = {"python": "3.11.2", "numpy": "2.3.0", "dask": "1", "blake3": "1.0", "fpng": "0.1"}
+    b = {"python": "3.12.0", "numpy": "2.4.6", "dask": "2", "blake3": "1.0", "isal": "1.7"}
+    assert version_changes(a, b, "then", "now") == "fpng 0.1 then, None now, isal None then, 1.7 now, " \
+                                                   "numpy 2.3.0 then, 2.4.6 now"
+    assert version_changes(a, a | {"distributed": "9"}, "there", "here") == ""
