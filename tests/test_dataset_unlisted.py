@@ -31,3 +31,19 @@ def test_by_default_the_episodes_the_manifest_lists_are_kept(tmp_path):
     (tmp_path / "manifest.json").write_text(json.dumps({"episodes": listed}))
     remove_unlisted(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["episode_0000", "episode_0002", "manifest.json"]
+
+
+def test_a_link_to_a_folder_and_short_numbers_are_not_a_runs(tmp_path):
+    """A run names its episodes with four digits or more and makes them as folders, never links."""
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "keep.txt").write_text("x")
+    out = tmp_path / "ds"
+    out.mkdir()
+    (out / "episode_0002").symlink_to(mine)
+    for folder in ("episode_12", "episode_", "episode_0003"):
+        (out / folder).mkdir()
+    assert [p.name for p in unlisted(out, {})] == ["episode_0003"]
+    remove_unlisted(out, {})
+    assert sorted(p.name for p in out.iterdir()) == ["episode_", "episode_0002", "episode_12"]
+    assert (mine / "keep.txt").read_text() == "x"
