@@ -1152,3 +1152,36 @@ def test_version_changes_name_only_the_packages_that_make_the_bytes():
     assert version_changes(a, b, "then", "now") == "fpng 0.1 then, None now, isal None then, 1.7 now, " \
                                                    "numpy 2.3.0 then, 2.4.6 now"
     assert version_changes(a, a | {"distributed": "9"}, "there", "here") == ""
+
+
+def test_in_flight_is_two_per_worker_thread_and_at_least_four():
+    from testbed.generate import in_flight
+
+    class Client:
+        def __init__(self, threads):
+            self.threads = threads
+
+        def nthreads(self):
+            return self.threads
+
+    assert in_flight(Client({"a": 3, "b": 2})) == 10
+    assert in_flight(Client({"a": 1})) == 4 == in_flight(Client({}))
+    assert in_flight(Client({}), {"a": 4, "b": 4}) == 16        # the threads given win over a new look
+
+
+def test_other_versions_are_a_warning_only_when_episodes_of_the_run_before_are_kept(tmp_path, monkeypatch, capsys):
+    """A --resume that keeps no episode mixes nothing: no word of the versions before."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2,), 1, 1, "png", load_params().to_dict())
+    monkeypatch.setattr(gen, "render_episode", lambda config, i, out, *args, **kw: fake_episode(config, i, out))
+    for keep, warned in (({}, False), ({0: {"index": 0, "name": "episode_0000", "frames": 1}}, True)):
+        out = tmp_path / str(warned)
+        gen.prepare_output(out, config, 2, False, False)
+        (out / "run_info.json").write_text(json.dumps({"versions": gen.versions() | {"numpy": "1.0.0"}}))
+        capsys.readouterr()
+        gen.generate(config, 2, out, keep)
+        err = capsys.readouterr().err
+        assert ("warning: --resume: other package versions than the run before (numpy 1.0.0 then, " in err) == warned
