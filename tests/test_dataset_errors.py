@@ -1185,3 +1185,47 @@ def test_other_versions_are_a_warning_only_when_episodes_of_the_run_before_are_k
         gen.generate(config, 2, out, keep)
         err = capsys.readouterr().err
         assert ("warning: --resume: other package versions than the run before (numpy 1.0.0 then, " in err) == warned
+
+
+def test_an_episode_failing_on_dask_leaves_the_folders_other_workers_may_still_write(tmp_path, monkeypatch):
+    """Cancelled episodes may still be running: their temporary folders are the caller's to
+    remove once the workers have stopped (remove_unlisted), not generate's."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    def episode(config, index, out, seconds=None):
+        if index == 1:
+            raise RuntimeError("episode 1 failed")
+        return fake_episode(config, index, out, seconds)
+
+    config = EpisodeConfig("lab", None, (2,), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 3, False, False)
+    running = out / ".episode_0002.w7.tmp"                     # another worker's episode, being written
+    running.mkdir()
+    monkeypatch.setattr(gen, "render_episode", episode)
+    with pytest.raises(RuntimeError, match="episode 1 failed"):
+        gen.generate(config, 3, out, {}, FakeClient())
+    assert running.is_dir()
+    assert [e["index"] for e in gen.read_manifest(out)["episodes"]] == [0]
+
+
+def test_run_info_keeps_each_episodes_stage_seconds_to_the_millisecond(tmp_path, monkeypatch):
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    def episode(config, index, out, progress=None, seconds=None, overlap=False):
+        seconds.update({"render": 1.23456, "png": 0.0004, "total": 2.0 + index})
+        return fake_episode(config, index, out)
+
+    config = EpisodeConfig("lab", None, (2,), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 2, False, False)
+    monkeypatch.setattr(gen, "render_episode", episode)
+    assert sorted(gen.generate(config, 2, out, {})) == [0, 1]
+    info = json.loads((out / "run_info.json").read_text())
+    assert info["episode_seconds"] == {"episode_0000": {"png": 0.0, "render": 1.235, "total": 2.0},
+                                       "episode_0001": {"png": 0.0, "render": 1.235, "total": 3.0}}
+    assert info["episodes_done"] == 2 and list(info["episode_hosts"]) == ["episode_0000", "episode_0001"]
