@@ -1229,3 +1229,18 @@ def test_run_info_keeps_each_episodes_stage_seconds_to_the_millisecond(tmp_path,
     assert info["episode_seconds"] == {"episode_0000": {"png": 0.0, "render": 1.235, "total": 2.0},
                                        "episode_0001": {"png": 0.0, "render": 1.235, "total": 3.0}}
     assert info["episodes_done"] == 2 and list(info["episode_hosts"]) == ["episode_0000", "episode_0001"]
+
+
+def test_run_info_counts_the_kept_episodes_as_done_and_names_the_hosts_of_those_rendered(tmp_path, monkeypatch):
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2,), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 3, False, False)
+    monkeypatch.setattr(gen, "render_episode", lambda config, i, out, *args, **kw: fake_episode(config, i, out))
+    kept = {1: {"index": 1, "name": "episode_0001", "frames": 1, "files": {}}}
+    assert sorted(gen.generate(config, 3, out, kept)) == [0, 1, 2]
+    info = json.loads((out / "run_info.json").read_text())
+    assert info["episodes_done"] == 3 and list(info["episode_hosts"]) == ["episode_0000", "episode_0002"]
