@@ -130,3 +130,30 @@ def test_an_episode_folder_that_is_a_link_is_checked_against_the_manifest_beside
     assert main(["export", "wildtrack", str(data / "episode_0003"), str(data.parent / "wt")]) == 2
     assert capsys.readouterr().err.strip() == ("camtask export: error: DIR: episode_0003 differs from its manifest "
                                                "(1 changed (people.csv)); `camtask verify` names every such file")
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"frames": True}, "frames: expected an integer >= 1, got true"),
+    ({"people": False}, "people: expected an integer >= 0, got false"),
+    ({"cameras": []}, "cameras: expected a non-empty list of distinct camera numbers >= 1, got []"),
+    ({"cameras": [1, True]}, "cameras: expected a non-empty list of distinct camera numbers >= 1, got [1, true]"),
+    ({"scene_yaml": 5}, "scene_yaml: expected the scene file's text, got 5"),
+])
+def test_read_meta_takes_no_booleans_for_counts_and_needs_a_camera(episode, change, message):
+    from testbed.dataset import read_meta
+
+    meta_with(episode, **change)
+    with pytest.raises(ValueError) as err:
+        read_meta(episode)
+    assert str(err.value) == f"{episode / 'meta.json'}: {message}"
+
+
+def test_read_meta_takes_an_episode_of_no_people_and_an_incomplete_one_when_asked(episode):
+    from testbed.dataset import read_meta
+
+    meta_with(episode, people=0)
+    assert read_meta(episode)["people"] == 0
+    meta_with(episode, frames=None, cameras=None)
+    assert sorted(read_meta(episode, complete=False)) == ["episode", "format", "people", "scene_yaml"]
+    with pytest.raises(ValueError, match="no 'cameras'"):
+        read_meta(episode)
