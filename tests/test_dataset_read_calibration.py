@@ -35,3 +35,18 @@ def test_missing_key_is_one_line_naming_it(tmp_path):
     path.write_text(text[:cut])                         # tvec and what follows gone
     with pytest.raises(ValueError, match="cam01.yaml.*tvec"):
         read_calibration(path)
+
+
+def test_the_file_holds_the_documented_shapes_and_camera_number(tmp_path):
+    """docs/dataset.md: distortion_coefficients 1x5, rvec and tvec 3x1, camera_number."""
+    cam = load_scene("lab").cameras[6]
+    write_calibration(tmp_path / "cam07.yaml", cam)
+    fs = cv2.FileStorage(str(tmp_path / "cam07.yaml"), cv2.FILE_STORAGE_READ)
+    try:
+        assert fs.getNode("camera_number").real() == 7
+        assert fs.getNode("camera_matrix").mat().shape == (3, 3)
+        assert fs.getNode("distortion_coefficients").mat().shape == (1, 5)
+        assert fs.getNode("rvec").mat().shape == (3, 1) and fs.getNode("tvec").mat().shape == (3, 1)
+        assert (fs.getNode("image_width").real(), fs.getNode("image_height").real()) == (640, 480)
+    finally:
+        fs.release()
