@@ -1244,3 +1244,30 @@ def test_run_info_counts_the_kept_episodes_as_done_and_names_the_hosts_of_those_
     assert sorted(gen.generate(config, 3, out, kept)) == [0, 1, 2]
     info = json.loads((out / "run_info.json").read_text())
     assert info["episodes_done"] == 3 and list(info["episode_hosts"]) == ["episode_0000", "episode_0002"]
+
+
+def test_a_lock_file_its_holder_deleted_meanwhile_is_not_the_one_locked(tmp_path, monkeypatch):
+    """A run that ends deletes its lock file: a run that opened the old file just before
+    would hold a lock on a file no longer in the folder, which a third run would not see;
+    it locks the file now at that name instead."""
+    from testbed import generate
+
+    real_flock = generate.fcntl.flock
+
+    out = tmp_path / "ds"
+    out.mkdir()
+    calls = []
+
+    def flock(fd, op):
+        real_flock(fd, op)
+        if not calls:                                 # the holder ends between our open and our lock
+            (out / generate.LOCK).unlink()
+            (out / generate.LOCK).write_bytes(b"")   # and the next run's file takes the name
+        calls.append(fd)
+
+    monkeypatch.setattr(generate.fcntl, "flock", flock)
+    fd = generate._lock(out / generate.LOCK, out)
+    try:
+        assert len(calls) == 2 and os.fstat(fd).st_ino == os.stat(out / generate.LOCK).st_ino
+    finally:
+        os.close(fd)
