@@ -1271,3 +1271,23 @@ def test_a_lock_file_its_holder_deleted_meanwhile_is_not_the_one_locked(tmp_path
         assert len(calls) == 2 and os.fstat(fd).st_ino == os.stat(out / generate.LOCK).st_ino
     finally:
         os.close(fd)
+
+
+def test_on_dask_an_episodes_last_frame_is_counted_once_it_is_listed(tmp_path, monkeypatch):
+    """The bar counts the masks in a running episode's temporary folder, all but the last
+    frame: an episode shows complete only when it is finished and listed."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2,), 3, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 1, False, False)
+    masks = out / ".episode_0000.w1.tmp" / "masks" / "cam02"
+    masks.mkdir(parents=True)
+    for f in range(3):                                  # every frame written, not yet renamed into place
+        (masks / f"{f:06d}.png").write_bytes(b"")
+    counted = []
+    monkeypatch.setattr(gen, "render_episode", fake_episode)
+    gen.generate(config, 1, out, {}, FakeClient(), progress=counted.append)
+    assert counted == [2, 1]
