@@ -275,16 +275,29 @@ def test_ctrl_c_stops_the_export_at_the_next_frame(tmp_path, monkeypatch):
     monkeypatch.setattr("testbed.parallel.default_workers", lambda: 2)
     written = []
     lock = threading.Lock()
+    interrupted = threading.Event()
+
+    def ctrl_c(signum, frame):                          # Python's own handler, and marks when it ran
+        interrupted.set()
+        raise KeyboardInterrupt
 
     def progress(n):
         with lock:
             written.append(n)
             if len(written) == 1:
                 os.kill(os.getpid(), signal.SIGINT)      # Ctrl-C after the first image
-        threading.Event().wait(0.05)                     # a frame takes a while
+        # the main thread takes the signal; on a loaded machine that can take longer than the
+        # cameras' every frame, so the cameras wait for it here, then take a while per frame
+        interrupted.wait(30)
+        threading.Event().wait(0.05)
 
-    with pytest.raises(KeyboardInterrupt):
-        wildtrack.export_episode(data / "episode_0000", out, "wildtrack", undistort=True, progress=progress)
+    previous = signal.signal(signal.SIGINT, ctrl_c)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            wildtrack.export_episode(data / "episode_0000", out, "wildtrack", undistort=True, progress=progress)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert interrupted.is_set()
     assert len(written) <= 4, len(written)               # not 2 cameras x 12 frames
     assert not out.exists() and not list(tmp_path.glob(".wild*"))
 
