@@ -243,3 +243,78 @@ def test_a_room_centred_on_the_origin_has_its_grid_from_the_corner_of_its_bounds
     assert (grid["origin_m"], grid["grid_width"], grid["grid_height"]) == ([-1.0, -1.0], 80, 80)
     # (-0.99, 0.99): floor(0.01 / 0.025) = 0, floor(1.99 / 0.025) = 79
     assert [a["positionID"] for a in annotations(out, 0)] == [40 + 80 * 40, 0 + 80 * 79]
+
+
+def test_grid_json_holds_the_grid_the_position_ids_are_on(tmp_path):
+    """grid.json's cell, origin and width decode each positionID back to the cell of its
+    person; the lab (22 x 19 ft = 6.7056 x 5.7912 m) is ceil(268.22) x ceil(231.65) cells."""
+    positions = np.array([[[1.0126, 0.4999], [6.7, 5.79], [3.3, 0.02]]])
+    ep = make_episode(tmp_path / "episode_0000", positions, {})
+    out = export_episode(ep, tmp_path / "wt")
+    grid = json.loads((out / "grid.json").read_text())
+    assert (grid["cell_m"], grid["origin_m"], grid["grid_width"], grid["grid_height"]) == (0.025, [0.0, 0.0], 269, 232)
+    assert grid["views"] == {"0": 2, "1": 5} and grid["units"] == "metres, world frame"
+    assert grid["source"] == str(ep.resolve())
+    for a, (x, y) in zip(annotations(out, 0), positions[0], strict=True):
+        gx, gy = a["positionID"] % grid["grid_width"], a["positionID"] // grid["grid_width"]
+        assert gy < grid["grid_height"]
+        assert grid["origin_m"][0] + gx * grid["cell_m"] <= x < grid["origin_m"][0] + (gx + 1) * grid["cell_m"]
+        assert grid["origin_m"][1] + gy * grid["cell_m"] <= y < grid["origin_m"][1] + (gy + 1) * grid["cell_m"]
+
+
+def test_ctrl_c_while_the_new_export_is_moved_into_place_leaves_the_new_one_whole(tmp_path, monkeypatch):
+    """Ctrl-C just after the earlier export was moved aside waits until the new one is in
+    place: taken there, the earlier one was deleted and the new one never moved in (no export left)."""
+    import signal
+
+    from testbed import wildtrack
+
+    ep = make_episode(tmp_path / "episode_0000", np.array([[[1.0, 2.0]]]), {})
+    out = export_episode(ep, tmp_path / "wt")
+    (out / "stale.txt").write_text("x")
+    real = os.replace
+
+    def replace(src, dst):                             # Ctrl-C once the earlier export is aside
+        real(src, dst)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(wildtrack.os, "replace", replace)
+    with pytest.raises(KeyboardInterrupt):
+        export_episode(ep, out)
+    assert (out / "grid.json").is_file() and not (out / "stale.txt").exists()     # the new export
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["episode_0000", "wt"]
+
+
+def test_undistort_maps_point_each_pinhole_pixel_at_its_distorted_pixel():
+    """The maps, worked with the Brown-Conrady model by hand: pinhole pixel (u, v) is the
+    normalised point ((u - cx) / fx, (v - cy) / fy), distorted, then through the same K
+    (whose principal point is off the image centre here: it stays where it is)."""
+    from testbed.wildtrack import undistort_maps
+
+    K = np.array([[40.0, 0.0, 29.0], [0.0, 42.0, 26.5], [0.0, 0.0, 1.0]])
+    dist = np.array([-0.2, 0.05, 0.001, -0.002, 0.01])
+    mx, my = undistort_maps(K, dist, (W, H))
+    assert mx.shape == my.shape == (H, W) and mx.dtype == my.dtype == np.float32
+    v, u = np.mgrid[0:H, 0:W].astype(float)
+    x, y = (u - K[0, 2]) / K[0, 0], (v - K[1, 2]) / K[1, 1]
+    k1, k2, p1, p2, k3 = dist
+    r2 = x * x + y * y
+    radial = 1 + k1 * r2 + k2 * r2 ** 2 + k3 * r2 ** 3
+    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+    np.testing.assert_allclose(mx, K[0, 0] * xd + K[0, 2], atol=1e-3)
+    np.testing.assert_allclose(my, K[1, 1] * yd + K[1, 2], atol=1e-3)
+
+
+def test_without_undistort_the_images_are_the_episodes_own_png_files_byte_for_byte(tmp_path):
+    """The rendered frames are copied, not decoded and encoded again (which keeps the pixels
+    but not the file: its compression, chunks, bit depth)."""
+    ep = make_episode(tmp_path / "episode_0000", np.array([[[1.0, 2.0]], [[1.5, 2.0]]]), {})
+    frame = ep / "frames" / "cam05" / "000001.png"
+    cv2.imwrite(str(frame), cv2.imread(str(frame)), [cv2.IMWRITE_PNG_COMPRESSION, 0])   # as no encoder of ours
+    for layout, digits in (("wildtrack", 8), ("multiviewx", 4)):
+        out = export_episode(ep, tmp_path / layout, layout=layout)
+        for n in (2, 5):
+            for f in (0, 1):
+                assert (out / "Image_subsets" / f"C{n}" / f"{f:0{digits}d}.png").read_bytes() == \
+                    (ep / "frames" / f"cam{n:02d}" / f"{f:06d}.png").read_bytes()
