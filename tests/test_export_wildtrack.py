@@ -375,6 +375,7 @@ def test_an_out_that_is_a_file_is_refused_and_kept(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("grid", ["not json {", '{"layout": "wildtrack"}', "[1, 2]",
+                                  '{"layout": "wildtrack", "cell_m": 0.025, "views": {"0": 1}}',   # no position_id
                                   '{"layout": "other", "cell_m": 0.025, "position_id": {}, "views": []}'])
 def test_overwrite_refuses_a_folder_whose_grid_json_is_not_an_exports(tmp_path, capsys, grid):
     episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
@@ -446,3 +447,62 @@ def test_an_episode_folder_that_is_a_link_is_checked_where_its_manifest_lists_it
         "choose a folder outside the dataset")]
     assert main(["export", "wildtrack", str(tmp_path / "ds"), str(tmp_path / "wt")]) == 0
     assert "no manifest lists" not in capsys.readouterr().err and (tmp_path / "wt" / "grid.json").is_file()
+
+
+def test_the_last_line_names_the_episode_the_layout_and_out(tmp_path, capsys):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    for layout, extra, line in (("wildtrack", [], "as WILDTRACK layout to"),
+                                ("multiviewx", ["--undistort"], "as MultiviewX layout (undistorted) to")):
+        capsys.readouterr()
+        assert main(["export", layout, str(episode), str(tmp_path / layout), *extra]) == 0
+        err = capsys.readouterr().err
+        assert err.splitlines()[-1] == f"wrote {episode} {line} {tmp_path / layout}"
+        assert "100%" in err and "| 2/2 [" in err                # the bar counts images: 2 cameras x 1 frame
+        grid = json.loads((tmp_path / layout / "grid.json").read_text())
+        assert (grid["layout"], grid["undistorted"], grid["boxes"]) == (layout, bool(extra), "visible")
+
+
+def test_an_episode_folder_of_another_index_is_exported_without_episode(tmp_path):
+    """Without --episode, an episode folder is taken whatever its index (0 is only the
+    dataset's default); --episode with its own index is taken too."""
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0003")
+    meta = json.loads((episode / "meta.json").read_text())
+    (episode / "meta.json").write_text(json.dumps(meta | {"episode": 3}))
+    assert main(["export", "wildtrack", str(episode), str(tmp_path / "a")]) == 0
+    assert main(["export", "wildtrack", str(episode), str(tmp_path / "b"), "--episode", "3"]) == 0
+    assert main(["export", "wildtrack", str(episode.parent), str(tmp_path / "c"), "--episode", "3"]) == 0
+    a = export_files(tmp_path / "a")
+    assert "annotations_positions/00000000.json" in a
+    assert export_files(tmp_path / "b") == a == export_files(tmp_path / "c")
+
+
+def test_overwrite_refuses_a_folder_whose_grid_json_is_a_folder(tmp_path, capsys):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    out = tmp_path / "wt"
+    (out / "grid.json").mkdir(parents=True)
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(episode), str(out), "--overwrite"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"camtask export: error: --overwrite: {out} is not an export of camtask (its grid.json is not one; it holds "
+         "grid.json); empty it yourself or choose another folder")]
+    assert (out / "grid.json").is_dir() and not any((out / "grid.json").iterdir())
+
+
+def test_an_episode_of_a_sha256_manifest_is_checked_with_sha256(tmp_path, capsys):
+    """A dataset written before manifest format 2 lists sha256 checksums (no "checksum" key):
+    its episodes export, and a changed file is still named."""
+    from testbed.episodes import checksums
+
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    entry = {"index": 0, "name": "episode_0000", "seed": 0, "spawn_key": [0], "frames": 1,
+             "files": checksums(episode, algorithm="sha256")}
+    (tmp_path / "ds" / "manifest.json").write_text(json.dumps({"format_version": 1, "episodes_planned": 1,
+                                                               "episodes": [entry]}))
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(tmp_path / "ds"), str(tmp_path / "wt")]) == 0
+    assert "warning" not in capsys.readouterr().err and (tmp_path / "wt" / "grid.json").is_file()
+    (episode / "people.csv").write_text((episode / "people.csv").read_text().replace("1.0,2.0", "1.5,2.0"))
+    assert main(["export", "wildtrack", str(tmp_path / "ds"), str(tmp_path / "wt2")]) == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        "camtask export: error: DIR: episode_0000 differs from its manifest (1 changed (people.csv)); "
+        "`camtask verify` names every such file")
