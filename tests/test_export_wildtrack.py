@@ -506,3 +506,28 @@ def test_an_episode_of_a_sha256_manifest_is_checked_with_sha256(tmp_path, capsys
     assert capsys.readouterr().err.splitlines()[-1] == (
         "camtask export: error: DIR: episode_0000 differs from its manifest (1 changed (people.csv)); "
         "`camtask verify` names every such file")
+
+
+def test_an_out_inside_the_dataset_that_lists_an_episode_link_is_refused(tmp_path, capsys):
+    """DIR an episode folder that is a link: the dataset beside the link (whose manifest lists
+    it) is kept clear as an episode's own dataset is, and so is the dataset the link leads into.
+    Only the link target's folder was looked at: an export into the dataset beside the link was written."""
+    from testbed.episodes import checksums
+
+    target = hand_made_episode(tmp_path / "elsewhere" / "episode_0000")
+    (tmp_path / "elsewhere" / "manifest.json").write_text("{}")
+    (tmp_path / "ds").mkdir()
+    (tmp_path / "ds" / "episode_0000").symlink_to(target, target_is_directory=True)
+    entry = {"index": 0, "name": "episode_0000", "seed": 0, "spawn_key": [0], "frames": 1, "files": checksums(target)}
+    (tmp_path / "ds" / "manifest.json").write_text(json.dumps({"format_version": 2, "checksum": "blake3",
+                                                               "episodes_planned": 1, "episodes": [entry]}))
+    for dataset in ("ds", "elsewhere"):
+        capsys.readouterr()
+        assert main(["export", "wildtrack", str(tmp_path / "ds" / "episode_0000"),
+                     str(tmp_path / dataset / "episode_0001")]) == 2
+        assert capsys.readouterr().err.splitlines() == [
+            (f"camtask export: error: OUT: {tmp_path / dataset / 'episode_0001'} is inside the dataset "
+             f"{tmp_path / dataset}; choose a folder outside the dataset")]
+    assert sorted(p.name for p in (tmp_path / "ds").iterdir()) == ["episode_0000", "manifest.json"]
+    assert sorted(p.name for p in (tmp_path / "elsewhere").iterdir()) == ["episode_0000", "manifest.json"]
+    assert main(["export", "wildtrack", str(tmp_path / "ds" / "episode_0000"), str(tmp_path / "wt")]) == 0

@@ -63,8 +63,11 @@ def run(args) -> int:
         if own != args.episode:
             raise ValueError(f"--episode {args.episode}: DIR {root} is episode {own} itself; give the dataset "
                              f"folder {root.resolve().parent} to choose another")
-    dataset = episode.resolve().parent         # DIR may be an episode of a dataset: keep out of that too
-    check_apart(args.out, root, episode, dataset=dataset if (dataset / MANIFEST).is_file() else None)
+    # DIR may be an episode of a dataset: keep out of that too; for an episode folder that is a
+    # link, both the dataset beside the link (whose manifest lists it) and the one it leads into
+    datasets = [d for d in dict.fromkeys((Path(os.path.abspath(episode)).parent, episode.resolve().parent))
+                if (d / MANIFEST).is_file()]
+    check_apart(args.out, root, episode, datasets=datasets)
     check_export_out(args.out, args.overwrite)
     check_intact(episode)
     meta = read_meta(episode)
@@ -80,15 +83,15 @@ def run(args) -> int:
     return 0
 
 
-def check_apart(out: str, *sources: Path, dataset: Path | None = None) -> None:
-    """Refuse an OUT that is a source folder (or the ``dataset`` an episode DIR belongs
-    to), lies inside one or holds one.
+def check_apart(out: str, *sources: Path, datasets=()) -> None:
+    """Refuse an OUT that is a source folder (or one of the ``datasets`` an episode DIR
+    belongs to), lies inside one or holds one.
 
     Inside the dataset, the export's files would make an episode fail its checksums (and
     ``--resume`` delete it); holding it, ``--overwrite`` would delete the dataset.
     """
     o = Path(out).resolve()
-    named = [(f"DIR {src}", src) for src in sources] + ([(f"the dataset {dataset}", dataset)] if dataset else [])
+    named = [(f"DIR {src}", src) for src in sources] + [(f"the dataset {d}", d) for d in datasets]
     for name, src in named:
         s = src.resolve()
         if o == s:
