@@ -531,3 +531,17 @@ def test_an_out_inside_the_dataset_that_lists_an_episode_link_is_refused(tmp_pat
     assert sorted(p.name for p in (tmp_path / "ds").iterdir()) == ["episode_0000", "manifest.json"]
     assert sorted(p.name for p in (tmp_path / "elsewhere").iterdir()) == ["episode_0000", "manifest.json"]
     assert main(["export", "wildtrack", str(tmp_path / "ds" / "episode_0000"), str(tmp_path / "wt")]) == 0
+
+
+def test_a_refused_out_names_its_first_files_in_name_order(tmp_path, capsys):
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    out = tmp_path / "mine"
+    out.mkdir()
+    for name in ("e.txt", "b.txt", "f.txt", "a.txt", "d.txt", "c.txt"):
+        (out / name).write_text("x")
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(episode), str(out), "--overwrite"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"camtask export: error: --overwrite: {out} is not an export of camtask (no grid.json; it holds a.txt, "
+         "b.txt, c.txt and 3 more); empty it yourself or choose another folder")]
+    assert len(list(out.iterdir())) == 6
