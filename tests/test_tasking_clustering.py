@@ -1,0 +1,167 @@
+"""The clustering tasker (paper section 4.2): pair axes, k-means on axial angles, camera picks.
+
+Hand cases pin the documented tolerances and tie rules; property tests check what holds for
+any drop of estimates: k distinct cameras, k-means clusters that are a fixed point of
+Lloyd's iteration on the doubled-angle circle, and the angle between two axes.
+"""
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+from test_tasking_common import ring_cameras
+
+from tasking.clustering import (
+    _one_thread,
+    axial_distance,
+    cluster_axes,
+    clustering_select,
+    pair_axes,
+)
+
+ALONG_X = np.array([[0.0, 0.0], [1.0, 0.0]])          # pair axes 0 and 90 degrees
+
+
+def test_pair_axes_keep_estimates_a_tenth_of_a_millimetre_apart():
+    """Two estimates 0.1 mm apart are distinct centres (only coinciding ones, within
+    1e-12 m, give no axis): their diagonal and its perpendicular, 45 and 135 degrees."""
+    got = pair_axes(np.array([[0.2, 0.3], [0.2001, 0.3001]]))
+    np.testing.assert_allclose(got, np.radians([45.0, 135.0]), atol=1e-9)
+    got = pair_axes(np.array([[0.2, 0.3], [0.2, 0.3001]]))
+    np.testing.assert_allclose(got, np.radians([90.0, 0.0]), atol=1e-9)
+
+
+def test_cluster_axes_of_axes_without_their_perpendiculars_are_not_turned():
+    """Two axes a milliradian short of a quarter turn apart are not closed under a quarter
+    turn, so there is no twin solution: each axis is its own cluster, centres exactly on
+    them, in increasing order (equal sizes). A twin taken for them would be 1 mrad off."""
+    axes = np.array([0.3, 0.3 + np.pi / 2 - 1e-3])
+    centres, sizes = cluster_axes(axes, 2, seed=0)
+    np.testing.assert_allclose(centres, axes, atol=1e-9)
+    assert sizes.tolist() == [1, 1]
+    axes = np.array([2.0, 2.0, 2.0, 2.0 - np.pi / 2 + 1e-3])   # twin would be [0.43, 0.43 + pi / 2]
+    centres, sizes = cluster_axes(axes, 2, seed=0)
+    np.testing.assert_allclose(centres, [2.0, 2.0 - np.pi / 2 + 1e-3], atol=1e-9)
+    assert sizes.tolist() == [3, 1]
+
+
+def test_a_camera_a_microradian_off_the_axis_loses_to_one_on_it():
+    """Only axes within AXIS_TOL (1e-9 rad) tie: camera 1, 1e-6 rad off the pair axis 0,
+    loses to camera 2 on it although its index is lower, with or without positions."""
+    yaw = np.array([np.pi / 2, 1e-6, 0.0])
+    xy = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    assert clustering_select(yaw, ALONG_X, 2, seed=0).tolist() == [0, 2]
+    assert clustering_select(yaw, ALONG_X, 2, seed=0, camera_xy=xy).tolist() == [0, 2]
+
+
+def test_a_millimetre_farther_from_the_chosen_camera_wins_a_tie():
+    """Cameras 1 and 2 share the axis 90 degrees; camera 0 (axis 0) is chosen first, at the
+    origin. Camera 2 is 1.001 m from it, camera 1 1 m: a millimetre is far beyond
+    SPREAD_TOL (1e-9 m), so camera 2 wins."""
+    yaw = np.radians([0.0, 90.0, 270.0])
+    xy = np.array([[0.0, 0.0], [1.0, 0.0], [-1.001, 0.0]])
+    assert clustering_select(yaw, ALONG_X, 2, seed=0, camera_xy=xy).tolist() == [0, 2]
+
+
+def test_cameras_equally_far_from_the_chosen_one_tie_to_the_lowest_index():
+    """Ring of 16: camera 0 (axis 0) is chosen first; cameras 4 and 12 both look along 90
+    degrees and are both sqrt(2) from camera 0 (12 by one rounding farther): a tie, so the
+    lowest index, 4."""
+    xy, yaw = ring_cameras(16)
+    gap = np.linalg.norm(xy[[4, 12]] - xy[0], axis=1)
+    np.testing.assert_allclose(gap, np.sqrt(2), rtol=1e-15)
+    assert clustering_select(yaw, ALONG_X, 2, seed=0, camera_xy=xy).tolist() == [0, 4]
+
+
+def test_a_second_round_without_positions_takes_an_unused_camera():
+    """Two pair axes (0 and 90 degrees) for k = 3: axis 0 picks again, and camera 0, on it
+    but already tasked, is not taken twice: camera 2 (10 degrees off) is."""
+    yaw = np.radians([0.0, 90.0, 10.0])
+    assert clustering_select(yaw, ALONG_X, 3, seed=0).tolist() == [0, 1, 2]
+
+
+def test_clustering_pins_blas_and_openmp_to_one_thread():
+    """k-means' sums must not depend on the machine's thread count (docs): inside the
+    context every thread pool that threadpoolctl sees (numpy's BLAS, scikit-learn's
+    OpenMP) runs one thread."""
+    import sklearn.cluster  # noqa: F401  (loads the OpenMP runtime)
+    from threadpoolctl import threadpool_info
+
+    with _one_thread():
+        pools = threadpool_info()
+        assert pools and all(p["num_threads"] == 1 for p in pools)
+
+
+def test_the_kmeans_seed_reaches_kmeans():
+    """k-means is a heuristic: on this drop of six estimates (30 axes, 3 clusters) k-means'
+    ten starts end in other local optima for other seeds. Each seed gives its own result,
+    the same every time."""
+    axes = pair_axes(np.random.default_rng(2).uniform(-0.8, 0.8, (6, 2)))
+    runs = {s: cluster_axes(axes, 3, seed=s) for s in (0, 1)}
+    for s, (centres, sizes) in runs.items():
+        again, again_sizes = cluster_axes(axes, 3, seed=s)
+        np.testing.assert_array_equal(again, centres)
+        np.testing.assert_array_equal(again_sizes, sizes)
+    assert runs[0][1].tolist() != runs[1][1].tolist() or not np.allclose(runs[0][0], runs[1][0], atol=1e-6)
+
+
+# --- properties ---------------------------------------------------------------------------
+
+angles = st.floats(-20.0, 20.0, allow_nan=False)
+
+
+@settings(max_examples=300, deadline=None)
+@given(angles, angles, st.integers(-3, 3))
+def test_axial_distance_is_the_angle_between_two_lines(a, b, turns):
+    """The angle between lines of directions a and b: atan2(|sin(a - b)|, |cos(a - b)|),
+    whatever multiple of pi either is written with, and symmetric."""
+    want = np.arctan2(abs(np.sin(a - b)), abs(np.cos(a - b)))
+    assert 0.0 <= axial_distance(a, b) <= np.pi / 2
+    assert axial_distance(a, b) == pytest.approx(want, abs=1e-9)
+    assert axial_distance(b, a) == pytest.approx(want, abs=1e-9)
+    assert axial_distance(a + turns * np.pi, b) == pytest.approx(want, abs=1e-9)
+
+
+estimate_sets = st.lists(st.tuples(st.integers(-40, 40), st.integers(-40, 40)), min_size=2, max_size=6,
+                         unique=True).map(lambda p: np.array(p, float) / 40)
+
+
+@settings(max_examples=60, deadline=None)
+@given(estimate_sets, st.integers(1, 6), st.integers(0, 3))
+def test_clusters_are_a_fixed_point_of_lloyds_iteration(est, k, seed):
+    """Every axis is nearest (on the doubled-angle circle) to the centre of its own cluster,
+    each centre is the mean direction of the axes nearest it, and the sizes count them
+    (drops where an axis is equally near two centres, to 1e-7, are skipped)."""
+    axes = pair_axes(est)
+    centres, sizes = cluster_axes(axes, k, seed=seed)
+    assert 1 <= centres.size <= k and sizes.sum() == axes.size and sizes.min() >= 1
+    assert np.all((centres >= 0) & (centres < np.pi)) and np.all(np.diff(sizes) <= 0)
+    feats = np.c_[np.cos(2 * axes), np.sin(2 * axes)]
+    cf = np.c_[np.cos(2 * centres), np.sin(2 * centres)]
+    d = np.linalg.norm(feats[:, None] - cf[None], axis=2)
+    if centres.size > 1:
+        two = np.sort(d, axis=1)[:, :2]
+        assume(np.all(two[:, 1] - two[:, 0] > 1e-7))
+    label = d.argmin(axis=1)
+    np.testing.assert_array_equal(np.bincount(label, minlength=centres.size), sizes)
+    for j, c in enumerate(centres):
+        mean = feats[label == j].mean(axis=0)
+        if np.hypot(*mean) > 1e-6:                   # the mean of an axis and its perpendicular is 0
+            assert axial_distance(np.arctan2(mean[1], mean[0]) / 2, c) < 1e-7
+
+
+@settings(max_examples=30, deadline=None)
+@given(estimate_sets, st.lists(st.integers(0, 15), min_size=1, max_size=10), st.data(), st.booleans())
+def test_clustering_tasks_k_distinct_cameras_in_order(est, yaw_steps, data, with_xy):
+    """Any drop and any rig (cameras may share axes, or sit on one spot): k distinct
+    indices, sorted, each a camera; the first centre's camera is one nearest its axis."""
+    n = len(yaw_steps)
+    yaw = np.array(yaw_steps) * np.pi / 8                # on 8 axes: shared axes are common
+    k = data.draw(st.integers(1, n))
+    xy = np.column_stack([np.cos(yaw), np.sin(yaw)]) if with_xy else None
+    got = clustering_select(yaw, est, k, seed=0, camera_xy=xy)
+    assert got.dtype.kind == "i" and got.shape == (k,)
+    assert np.all(np.diff(got) > 0) and got[0] >= 0 and got[-1] < n
+    centres, _ = cluster_axes(pair_axes(est), k, seed=0)
+    dist = axial_distance(yaw, centres[0])
+    assert dist[got].min() <= dist.min() + 1e-9
