@@ -81,17 +81,23 @@ def cluster_axes(axes: np.ndarray, k: int, seed: int):
     centres = (np.arctan2(km.cluster_centers_[:, 1], km.cluster_centers_[:, 0]) / 2) % np.pi % np.pi
     sizes = np.bincount(km.labels_, minlength=c)
     centres, sizes = centres[sizes > 0], sizes[sizes > 0]
-    order = np.lexsort((centres, -sizes))
+    order = np.lexsort((centres, _wrapped(centres), -sizes))
     centres, sizes = centres[order], sizes[order]
     if _closed_under_quarter_turn(feats):
         # every axis has its perpendicular: each solution has a twin turned by pi / 2, of
         # equal inertia, and rounding chose between them (with 1 or 2 OpenMP threads, other
         # cameras): take the one whose centres come first, largest cluster first
         twin = (centres + np.pi / 2) % np.pi
-        order = np.lexsort((twin, -sizes))
-        if tuple(np.round(twin[order], 9)) < tuple(np.round(centres, 9)):
+        order = np.lexsort((twin, _wrapped(twin), -sizes))
+        if tuple(_wrapped(twin[order])) < tuple(_wrapped(centres)):
             centres, sizes = twin[order], sizes[order]
     return centres, sizes
+
+
+def _wrapped(angles: np.ndarray) -> np.ndarray:
+    """Axial angles in ``[0, pi)`` rounded to 1e-9 rad, those within it of pi as 0: the key
+    that orders centres (k-means puts a centre on the axis 0 at 1e-14 or at pi - 1e-14)."""
+    return np.round(angles, 9) % np.round(np.pi, 9)
 
 
 def _closed_under_quarter_turn(feats: np.ndarray) -> bool:

@@ -165,3 +165,17 @@ def test_clustering_tasks_k_distinct_cameras_in_order(est, yaw_steps, data, with
     centres, _ = cluster_axes(pair_axes(est), k, seed=0)
     dist = axial_distance(yaw, centres[0])
     assert dist[got].min() <= dist.min() + 1e-9
+
+
+def test_twin_solutions_with_an_axis_at_the_wrap_are_one_whatever_the_kmeans_seed():
+    """Seven estimates mirrored about the x axis: the largest cluster (11 axes) is centred on
+    the axis 0, which k-means puts at 1e-14 or at pi - 1e-14 rad, the same axis. Of a solution
+    and its quarter-turned twin the one whose centres come first is returned, the largest
+    cluster on 0 here, not on pi / 2: compared without the wrap, pi - 1e-14 came after
+    pi / 2, and k-means seeds 2 and 3 returned the twin (other cameras on a ring)."""
+    est = np.array([[-0.53, -0.67], [0.53, -0.67], [0.0, -0.56], [-0.42, 0.46], [0.42, 0.46],
+                    [-0.71, 0.6], [0.71, 0.6]])
+    axes = pair_axes(est)
+    for seed in (0, 2, 3):
+        centres, sizes = cluster_axes(axes, 5, seed=seed)
+        assert sizes[0] == 11 and axial_distance(centres[0], 0.0) < 1e-9
