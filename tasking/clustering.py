@@ -102,9 +102,15 @@ def _wrapped(angles: np.ndarray) -> np.ndarray:
 
 def _closed_under_quarter_turn(feats: np.ndarray) -> bool:
     """Whether axial angles, as doubled-angle points ``feats`` (s, 2), turned by pi / 2 (the
-    points negated) are the same multiset (compared to 1e-9, without a wrap at pi)."""
-    key = lambda f: f[np.lexsort(f.T[::-1])]
-    return bool(np.allclose(key(np.round(feats, 9)), key(np.round(-feats, 9)), atol=1e-8))
+    points negated) are the same multiset (points within 1e-8 count as one, without a wrap
+    at pi): every point has as many points of ``feats`` as of ``-feats`` that near it.
+    (Sorting the points rounded to 1e-9 paired wrong partners when two equal coordinates
+    rounded apart.)"""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(feats)
+    near = tree.query_ball_point(feats, r=1e-8, return_length=True)
+    return bool(np.array_equal(near, tree.query_ball_point(-feats, r=1e-8, return_length=True)))
 
 
 _CONTROLLER = None
