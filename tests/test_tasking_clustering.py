@@ -196,3 +196,11 @@ def test_axes_that_round_apart_still_have_their_twin_solution_taken_first():
         centres, sizes = cluster_axes(axes, 3, seed=seed)
         np.testing.assert_array_equal(sizes, first_sizes)
         assert np.all(axial_distance(centres, first) < 1e-9)
+
+
+def test_of_equal_clusters_the_one_on_the_axis_0_comes_first_even_just_below_pi():
+    """Axes 0.1 and pi - 0.1 - 4e-12 average to a centre 2e-12 rad below pi, the axis 0:
+    of two clusters of two it comes before the one at 1.05 rad (and picks first)."""
+    centres, sizes = cluster_axes(np.array([0.1, np.pi - 0.1 - 4e-12, 1.0, 1.1]), 2, seed=0)
+    assert sizes.tolist() == [2, 2]
+    assert axial_distance(centres[0], 0.0) < 1e-9 and centres[1] == pytest.approx(1.05, abs=1e-9)
