@@ -210,3 +210,42 @@ def test_a_pixel_past_a_lens_reach_gets_the_ray_that_lands_nearest_it(rd):
     uv = np.array([[50 + 100 * rd * 0.6, 50 + 100 * rd * 0.8]])
     ray = undistort_points(uv, K, [-0.5, 0.0, 0.0, 0.0, 0.0])[0]
     np.testing.assert_allclose(ray, np.sqrt(2 / 3) * np.array([0.6, 0.8]), atol=1e-12)
+
+
+@pytest.mark.parametrize("dist, turn", [
+    ([-0.5, 0.0, 0.0, 0.0, 0.0], np.sqrt(1 / 1.5)),         # d/dr r (1 - 0.5 r^2) = 1 - 1.5 r^2
+    ([0.0, -0.2, 0.0, 0.0, 0.0], 1.0),                      # 1 - 5 * 0.2 r^4
+    ([0.0, 0.0, 0.0, 0.0, -0.1], (1 / 0.7) ** (1 / 6)),     # 1 - 7 * 0.1 r^6
+])
+def test_a_lens_whose_radial_factor_turns_just_past_its_corners_is_refused(dist, turn):
+    """A 101 x 101 image whose corner pixels' rays lie at 0.985 or 0.995 of the radius where the
+    radial factor r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing (by hand): within 1% of its
+    farthest ray the lens folds, which check_lens refuses; at 1.5% it accepts it."""
+    from pipeline.rectify import check_lens
+
+    k1, k2, _, _, k3 = dist
+    for share, refused in ((0.985, False), (0.995, True)):
+        r = share * turn
+        f = 50.5 * np.sqrt(2) / (r * (1 + k1 * r**2 + k2 * r**4 + k3 * r**6))   # the corner is 50.5 px per axis out
+        cam = Camera(1, np.array([[f, 0, 50.0], [0, f, 50.0], [0, 0, 1]]), np.array(dist), np.eye(3), np.zeros(3),
+                     101, 101)
+        if refused:
+            with pytest.raises(ValueError, match=r"folds over inside its image \(rays farther out come back nearer "
+                                                 r"the centre\); use smaller distortion coefficients$"):
+                check_lens(cam)
+        else:
+            check_lens(cam)
+
+
+@pytest.mark.parametrize("cx, hint", [(-0.25, False), (-0.5, False), (-0.75, True), (640.0, True), (639.5, False)])
+def test_a_folding_lens_is_told_to_move_its_principal_point_only_when_it_is_off_the_image(cx, hint):
+    """The image's pixels reach from -0.5 to W - 0.5: a principal point on them gets no such hint."""
+    from pipeline.rectify import check_lens
+
+    lab = load_scene("lab").cameras[0]
+    K = lab.K.copy()
+    K[0, 2] = cx
+    cam = dataclasses.replace(lab, K=K, dist=np.array([-0.6, 0.0, 0.0, 0.0, 0.0]))
+    with pytest.raises(ValueError, match="folds over inside its image") as info:
+        check_lens(cam)
+    assert ("or a principal point nearer the image than" in str(info.value)) == hint, str(info.value)
