@@ -176,3 +176,19 @@ def test_envelopes_are_the_source_ranges_of_each_output_column_and_row():
                 assert row_y[i, :, r].tolist() == [min(ys), max(ys)]
             else:
                 assert row_y[i, 0, r] > row_y[i, 1, r]
+
+
+def test_a_folding_lens_is_found_beside_a_camera_of_the_same_matrix_and_named_by_its_file():
+    """Lenses are checked once per camera matrix, distortion and size: a second camera with the
+    first's K and size but coefficients that fold over is refused, under its own name."""
+    import dataclasses
+
+    from pipeline.rectify import check_rectifiable
+
+    good = LAB[1]
+    bad = dataclasses.replace(LAB[2], K=good.K.copy(), dist=np.array([-0.6, 0.0, 0.0, 0.0, 0.0]))
+    names = ["DIR: calibration/cam02.yaml", "DIR: calibration/cam03.yaml", "DIR: calibration/cam04.yaml"]
+    check_rectifiable([good, LAB[3]], names[::2])
+    with pytest.raises(ValueError, match=r"^DIR: calibration/cam03\.yaml: camera 3: its lens distortion "
+                                         r"\[-0\.6, 0\.0, 0\.0, 0\.0, 0\.0\] folds over inside its image"):
+        check_rectifiable([good, bad, LAB[3]], names)
