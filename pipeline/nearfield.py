@@ -19,6 +19,8 @@ rows form one interval ``[near, far]``, in closed form:
 * ``Yb - (H - h) s u >= m``: ``d >= (H - h) s / (Yb - m)`` for a camera above the object's
   top (its top below the image: the near field); ``d <= (h - H) s / (m - Yb)`` for one
   below it whose lower edge is above the horizon,
+* ``Yb - Yt >= m``: a column fewer than ``margin`` rows tall never shows that many (the
+  three above can all hold there for a camera pitched down: its upper edge below the horizon),
 
 with ``m = margin / f``. Closer than the **blind radius** (the largest ``near`` over the
 columns) or farther than the **sight radius** (the smallest ``far``) the camera can send
@@ -142,6 +144,7 @@ def sight_range(cameras, object_height: float, margin: float = 1.0,
             lo = np.where(above & (room > 0), top / room, lo)
             lo = np.where(above & (room <= 0), np.inf, lo)
             hi = np.where(~above & (room < 0), np.minimum(hi, top / room), hi)   # both <= 0
+            lo = np.where(Yb - Yt < m, np.inf, lo)     # a column fewer than `margin` rows tall
         near[i], far[i] = float(np.max(lo)), float(np.min(hi))
         if object_width is not None:                    # too narrow beyond these
             g = raw_pixels_per_radian(camera) if pixels_per_radian is None else pixels_per_radian[i]

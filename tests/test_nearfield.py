@@ -432,3 +432,21 @@ def test_a_sight_radius_alone_frees_the_field_of_view_up_to_it(far):
     inscribed = Polygon([(0, 0), *sector])            # the sector's polygon, chords inside
     assert farthest(empty, (0.0, 0.0)) <= far + 1e-12     # the overlays snap to 6e-13 m
     assert inscribed.difference(empty).area < 1e-12 * far**2
+
+
+@pytest.mark.parametrize("pitch_deg", [30.0, 45.0, 60.0])
+def test_a_column_shorter_than_the_margin_never_shows_the_object(pitch_deg):
+    """A 64 x 40 pinhole pitched down: its image's upper and lower edges are level lines on the
+    level camera, at tan(pitch - a_top) and tan(pitch + a_bottom) (a: the half pixel edges'
+    angles off its axis), so every column is f_v (tan(pitch + a_bottom) - tan(pitch - a_top))
+    rows tall. An object cannot show more rows than that: with a margin 5% above it the camera
+    never sees it (near = far = inf); 5% below, it does at some distance."""
+    camera = Camera.from_pose(1, [1.0, 2.0, 2.2], 0.3, np.radians(pitch_deg), 64, 40, np.radians(49.0), np.zeros(5))
+    f_v = level_cameras([camera])[0][0, 1, 1]
+    a_top = np.arctan((camera.K[1, 2] + 0.5) / camera.K[1, 1])
+    a_bottom = np.arctan((camera.height - 0.5 - camera.K[1, 2]) / camera.K[1, 1])
+    p = np.radians(pitch_deg)
+    column = f_v * (np.tan(p + a_bottom) - np.tan(p - a_top))
+    near, far = sight_range([camera], 1.75, margin=0.95 * column)
+    assert 0.0 < near[0] < far[0] < np.inf
+    assert np.concatenate(sight_range([camera], 1.75, margin=1.05 * column)).tolist() == [np.inf, np.inf]
