@@ -450,3 +450,34 @@ def test_a_column_shorter_than_the_margin_never_shows_the_object(pitch_deg):
     near, far = sight_range([camera], 1.75, margin=0.95 * column)
     assert 0.0 < near[0] < far[0] < np.inf
     assert np.concatenate(sight_range([camera], 1.75, margin=1.05 * column)).tolist() == [np.inf, np.inf]
+
+
+def test_a_camera_with_its_upper_edge_just_above_the_horizon_sees_a_foot_out_to_twice_h_f_over_margin():
+    """A pinhole 1 m high pitched down by its upper half field of view less 1 degree: its upper
+    edge is a level line at y = -tan(1 degree) on the level camera. With a margin of twice that
+    (m = margin / f_v = 2 tan(1 degree)) a 5 m object's foot shows ``margin`` rows below the edge
+    out to d = H s / (m / 2), least at the centre column (s = 1); its size (h s / m) and its top
+    (above the camera) limit less, and it is seen from the camera's feet on."""
+    level = pinhole(1.0, 0.0)
+    a_top = np.degrees(np.arctan((level.K[1, 2] + 0.5) / level.K[1, 1]))
+    camera = pinhole(1.0, a_top - 1.0)
+    f_v = level_cameras([camera])[0][0, 1, 1]
+    margin = 2 * np.tan(np.radians(1.0)) * f_v
+    near, far = sight_range([camera], 5.0, margin)
+    assert near[0] == 0.0
+    assert far[0] == pytest.approx(1.0 / np.tan(np.radians(1.0)), rel=1e-6)
+
+
+def test_the_size_limit_of_a_band_off_the_axis_is_at_its_column_nearest_the_axis():
+    """A level pinhole whose principal point is 100 px left of its image: every column looks
+    right of the axis, the nearest at x0 = (-0.5 - cx) / f. Level, it sees the horizon, so the
+    foot of any object, and the top of one taller than the camera from its feet on; far is
+    where the object is ``margin`` rows tall in that column: h sqrt(1 + x0^2) f_v / margin."""
+    cam = Camera.from_pose(1, [1.0, 2.0, 2.2], 0.4, 0.0, 640, 480, np.radians(49.0), np.zeros(5),
+                           principal=(-100.0, 239.5))
+    x0 = (-0.5 - cam.K[0, 2]) / cam.K[0, 0]
+    assert x0 > 0.1
+    f_v = level_cameras([cam])[0][0, 1, 1]
+    near, far = sight_range([cam], 3.0, margin=3.0)
+    assert near[0] == 0.0
+    assert far[0] == pytest.approx(3.0 * np.sqrt(1 + x0**2) * f_v / 3.0, rel=1e-9)
