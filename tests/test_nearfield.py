@@ -481,3 +481,18 @@ def test_the_size_limit_of_a_band_off_the_axis_is_at_its_column_nearest_the_axis
     near, far = sight_range([cam], 3.0, margin=3.0)
     assert near[0] == 0.0
     assert far[0] == pytest.approx(3.0 * np.sqrt(1 + x0**2) * f_v / 3.0, rel=1e-9)
+
+
+def test_given_pixels_per_radian_are_each_cameras_own_and_a_range_of_one_distance_is_none(lab):
+    """far = w g_i / raw_columns with each camera's own g_i (given); where that is exactly the
+    blind radius (g a power of two, so w = near / g is exact) the object shows at no distance
+    but one: near = far = inf, as when it ends before the blind radius."""
+    cams = lab.cameras[:2]
+    far = sight_range(cams, 1.75, object_width=0.1, columns=0.01, pixels_per_radian=[300.0, 200.0])[1]
+    np.testing.assert_allclose(far, [30.0, 20.0], rtol=1e-12)
+    blind = sight_range(cams[:1], 1.75)[0][0]
+    assert 0.5 < blind < 1.0
+    got = sight_range(cams[:1], 1.75, object_width=blind / 1024.0, columns=0.5, pixels_per_radian=[1024.0])
+    assert np.concatenate(got).tolist() == [np.inf, np.inf]
+    got = sight_range(cams[:1], 1.75, object_width=blind / 1000.0, columns=0.5, pixels_per_radian=[1024.0])
+    assert got[0][0] == blind and got[1][0] == pytest.approx(1.024 * blind, rel=1e-12)
