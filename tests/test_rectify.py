@@ -192,3 +192,15 @@ def test_a_folding_lens_is_found_beside_a_camera_of_the_same_matrix_and_named_by
     with pytest.raises(ValueError, match=r"^DIR: calibration/cam03\.yaml: camera 3: its lens distortion "
                                          r"\[-0\.6, 0\.0, 0\.0, 0\.0, 0\.0\] folds over inside its image"):
         check_rectifiable([good, bad, LAB[3]], names)
+
+
+def test_a_rig_needs_a_camera_and_one_resolution():
+    import dataclasses
+
+    from pipeline.rectify import level_cameras
+
+    with pytest.raises(ValueError, match=r"^cameras: expected at least one calibrated camera$"):
+        level_cameras([])
+    small = dataclasses.replace(LAB[1], width=320, height=240)
+    with pytest.raises(ValueError, match=r"^cameras: expected every camera to have the same resolution$"):
+        level_cameras([LAB[0], small])
