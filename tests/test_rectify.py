@@ -204,3 +204,23 @@ def test_a_rig_needs_a_camera_and_one_resolution():
     small = dataclasses.replace(LAB[1], width=320, height=240)
     with pytest.raises(ValueError, match=r"^cameras: expected every camera to have the same resolution$"):
         level_cameras([LAB[0], small])
+
+
+def test_rectify_takes_any_non_zero_mask_value_and_refuses_other_shapes():
+    """Masks of 255 (the opening's) rectify as masks of True; the precomputed maps are read-only."""
+    from pipeline import Rectifier
+
+    cam = scene.Camera.from_pose(1, [0.0, 0.0, 1.5], 0.2, np.radians(10.0), 40, 30, np.radians(50),
+                                 [-0.1, 0.01, 0, 0, 0])
+    rect = Rectifier.build([cam])
+    mask = np.zeros((1, 30, 40), bool)
+    mask[0, 5:20, 8:30] = True
+    want = rect.rectify(mask)
+    assert want.any()
+    for value in (1, 7, 255):
+        np.testing.assert_array_equal(rect.rectify(mask.astype(np.uint8) * value), want)
+    for bad in (mask[0], mask[None], np.zeros((2, 30, 40), bool)):
+        with pytest.raises(ValueError, match=r"^masks: expected 1 cameras of \(H, W\), got shape"):
+            rect.rectify(bad)
+    for name in ("K_virtual", "bearings", "fixed_map", "column_x", "row_y"):
+        assert not getattr(rect, name).flags.writeable, name
