@@ -144,19 +144,20 @@ def _mirrored(rays: np.ndarray, dist, camera: Camera | None = None) -> bool:
 
 def check_column_threshold(column_threshold: float, cameras, option: str) -> None:
     """Raise a one-line ValueError naming ``option`` when ``column_threshold`` (pixels) is
-    above the rows of the cameras' rectified columns: every scanline would be empty (the
-    :class:`Pipeline` itself allows it; ``render`` and ``run`` check it before any work).
+    not below the rows of the cameras' rectified columns: a column is occupied when its
+    count exceeds the threshold, so every scanline would be empty (the :class:`Pipeline`
+    itself allows it; ``render`` and ``run`` check it before any work).
 
     >>> from scene import load_scene
     >>> check_column_threshold(600, load_scene("lab").cameras, "--params")
     Traceback (most recent call last):
     ...
-    ValueError: --params: column_threshold 600 exceeds the 552 pixels of a rectified column; every scanline would be empty
+    ValueError: --params: column_threshold 600 is not below the 552 pixels of a rectified column; every scanline would be empty
     """
     rows = level_cameras(cameras)[1]
-    if column_threshold > rows:
-        raise ValueError(f"{option}: column_threshold {column_threshold:g} exceeds the {rows} pixels of a rectified "
-                         "column; every scanline would be empty")
+    if column_threshold >= rows:
+        raise ValueError(f"{option}: column_threshold {column_threshold:g} is not below the {rows} pixels of a "
+                         "rectified column; every scanline would be empty")
 
 
 def check_rectifiable(cameras, names=None) -> None:

@@ -53,8 +53,10 @@ class TuneResult:
 
 
 def searched_space(cameras) -> dict[str, tuple]:
-    """:data:`SPACE` for ``cameras``: ``column_threshold`` at most the rows of their rectified
-    columns (above it every scanline is empty, a file ``scanlines`` refuses).
+    """:data:`SPACE` for ``cameras``: ``column_threshold`` at most one below the rows of their
+    rectified columns (a column is occupied when its count exceeds the threshold: from the
+    rows on, every scanline is empty, a file ``scanlines`` refuses); half a row for columns
+    of one row.
 
     >>> from scene import load_scene
     >>> searched_space(load_scene("lab").cameras)["column_threshold"]
@@ -63,7 +65,9 @@ def searched_space(cameras) -> dict[str, tuple]:
     from .rectify import level_cameras
 
     kind, low, high = SPACE["column_threshold"]
-    return {**SPACE, "column_threshold": (kind, low, float(min(high, level_cameras(cameras)[1])))}
+    rows = level_cameras(cameras)[1]
+    top = float(min(high, rows - 1)) if rows >= 2 else rows / 2
+    return {**SPACE, "column_threshold": (kind, min(low, top), top)}
 
 
 def suggest(trial, space: dict | None = None) -> PipelineParams:

@@ -744,7 +744,7 @@ def test_params_that_cannot_give_a_picture_are_refused_before_any_work(tmp_path,
     out = tmp_path / "data"
     code, line = run(capsys, "lab", "--out", str(out), "--workers", "0", "--frames", "1", "--cameras", "1",
                      "--params", str(params))
-    assert code == 2 and "--params: column_threshold 100000 exceeds the 552 pixels of a rectified column" in line
+    assert code == 2 and "--params: column_threshold 100000 is not below the 552 pixels of a rectified column" in line
     assert not out.exists()
 
 
@@ -1029,7 +1029,7 @@ def test_the_column_threshold_is_checked_against_the_cameras_rendered(tmp_path, 
     code, line = run(capsys, str(tmp_path / "scene.yaml"), "--cameras", "1", "--frames", "1", "--params",
                      str(tmp_path / "p.yaml"), "--out", str(tmp_path / "ds"), "--workers", "0")
     assert (code, line) == (2, ("camtask render: error: --params: column_threshold 600 "
-                               "exceeds the 552 pixels of a rectified column; every scanline would be empty"))
+                               "is not below the 552 pixels of a rectified column; every scanline would be empty"))
     assert not (tmp_path / "ds").exists()
 
 

@@ -355,7 +355,7 @@ def test_a_column_threshold_no_column_reaches_is_refused_before_the_walk(command
     (tmp_path / "p.yaml").write_text("column_threshold: 100000\n")
     assert main([*command, "--params", str(tmp_path / "p.yaml")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "--params: column_threshold 100000 exceeds the 552 pixels of a rectified column" in err[0]
+    assert len(err) == 1 and "--params: column_threshold 100000 is not below the 552 pixels of a rectified column" in err[0]
 
 
 @pytest.mark.render
@@ -520,8 +520,8 @@ def test_a_default_column_threshold_too_high_says_it_is_the_default(command, cap
     assert main([names.get(a, a) for a in command] + ["--frames", "1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].endswith(
-        "error: --params (not given: the default assets/pipeline/default.yaml): column_threshold 55 exceeds the "
-        "50 pixels of a rectified column; every scanline would be empty"), err
+        "error: --params (not given: the default assets/pipeline/default.yaml): column_threshold 55 is not below "
+        "the 50 pixels of a rectified column; every scanline would be empty"), err
     assert not (tmp_path / "out").exists()
 
 

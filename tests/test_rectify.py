@@ -79,10 +79,13 @@ def test_the_virtual_camera_puts_the_band_on_its_end_columns_and_the_image_in_it
         assert (out_h - 2 - K[1, 2]) / f < ymax - tol and (out_h - 1 - K[1, 2]) / f >= ymax - tol
 
 
-def test_a_column_threshold_of_the_rows_of_a_column_is_allowed_and_one_above_is_not():
+def test_a_column_threshold_below_the_rows_of_a_column_is_allowed_and_the_rows_are_not():
     """The lab's rectified columns are 552 rows: the ceiling of the image's height on the level
-    camera in its pixels, plus one (OpenCV's border, f from the band's width)."""
+    camera in its pixels, plus one (OpenCV's border, f from the band's width). A column is
+    occupied when its count exceeds the threshold, so a threshold of 552 leaves every
+    scanline empty, even of a column that is foreground from top to bottom."""
     from pipeline.rectify import check_column_threshold
+    from pipeline.scanline import median_threshold
 
     cam = LAB[0]
     n = 4001
@@ -90,9 +93,12 @@ def test_a_column_threshold_of_the_rows_of_a_column_is_allowed_and_one_above_is_
     f = (cam.width - 1) / (x[3 * n:].min() - x[2 * n:3 * n].max())
     rows = int(np.ceil((y.max() - y.min()) * f)) + 1
     assert rows == 552
-    check_column_threshold(rows, LAB[:2], "--params")
-    with pytest.raises(ValueError, match=r"^--params: column_threshold 552\.5 exceeds the 552 pixels"):
-        check_column_threshold(rows + 0.5, LAB[:2], "--params")
+    full = np.full((1, 8), float(rows))                 # every pixel of every column foreground
+    assert median_threshold(full, 1, rows - 0.5).all() and not median_threshold(full, 1, rows).any()
+    check_column_threshold(rows - 0.5, LAB[:2], "--params")
+    for refused in (rows, rows + 0.5):
+        with pytest.raises(ValueError, match=rf"^--params: column_threshold {refused:g} is not below the 552 pixels"):
+            check_column_threshold(refused, LAB[:2], "--params")
 
 
 @pytest.mark.parametrize("pitch_deg, refused", [(65.0, False), (70.0, True), (-70.0, True)])

@@ -103,7 +103,7 @@ def test_a_column_threshold_above_the_rectified_column_is_refused_first(render_d
     from pipeline import PipelineParams
 
     PipelineParams(column_threshold=500.0).to_yaml(tmp_path / "p.yaml")
-    with pytest.raises(ValueError, match=r"^--params: column_threshold 500 exceeds the \d+ pixels of a rectified "
+    with pytest.raises(ValueError, match=r"^--params: column_threshold 500 is not below the \d+ pixels of a rectified "
                                          r"column; every scanline would be empty$"):
         camtask(["tune", str(render_dir), "--trials", "1", "--params", str(tmp_path / "p.yaml"),
                  "--out", str(tmp_path / "t.yaml")])
@@ -131,7 +131,20 @@ def test_the_search_stays_below_the_rows_of_a_small_cameras_rectified_column(mon
 
     monkeypatch.setattr(pipeline.tuning, "scanline_f1", scanline_f1)
     pipeline.tuning.tune(cams, bg, frames, gt, 25, seed=0, start=PipelineParams(column_threshold=20.0))
-    assert len(tried) == 25 and max(tried) <= rows
+    assert len(tried) == 25 and max(tried) <= rows - 1   # a column must exceed it: rows empty every scanline
+
+
+def test_columns_of_one_row_are_searched_at_half_a_row(monkeypatch):
+    """The search's top is one below the rows of a column; for columns of one row that would
+    be 0, which column_threshold (> 0) refuses."""
+    import pipeline.rectify
+
+    cams = tiny_cameras()
+    real = pipeline.rectify.level_cameras
+    monkeypatch.setattr(pipeline.rectify, "level_cameras", lambda c: (real(c)[0], 1))
+    assert pipeline.tuning.searched_space(cams)["column_threshold"] == ("float", 0.5, 0.5)
+    monkeypatch.setattr(pipeline.rectify, "level_cameras", lambda c: (real(c)[0], 2))
+    assert pipeline.tuning.searched_space(cams)["column_threshold"] == ("float", 1.0, 1.0)
 
 
 def test_frames_with_nobody_in_view_are_warned_of(tmp_path, capsys):
@@ -158,7 +171,7 @@ def tiny_cameras():
 
 
 def test_a_start_outside_the_search_is_warned_of_with_the_range_searched(tmp_path, capsys):
-    """The warning named SPACE's 1..60 for column_threshold where the search covered 1..46."""
+    """The warning named SPACE's 1..60 for column_threshold where the search covered 1..45."""
     cams = tiny_cameras()
     bg, images, labels = synthetic_sequence(cams, 2, np.random.default_rng(2))
     write_render_dir(tmp_path / "tiny", cams, bg, images, labels)
@@ -166,7 +179,7 @@ def test_a_start_outside_the_search_is_warned_of_with_the_range_searched(tmp_pat
     assert camtask(["tune", str(tmp_path / "tiny"), "--trials", "1", "--params", str(tmp_path / "s.yaml"),
                     "--out", str(tmp_path / "t.yaml"), "--json"]) == 0
     assert capsys.readouterr().err.splitlines()[0].startswith(
-        "warning: --params: column_threshold 0.5 is outside the searched range 1..46: ")
+        "warning: --params: column_threshold 0.5 is outside the searched range 1..45: ")
 
 
 @pytest.mark.parametrize("trials", [0, -3])
