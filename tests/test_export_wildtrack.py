@@ -390,11 +390,17 @@ def test_overwrite_refuses_a_folder_whose_grid_json_is_not_an_exports(tmp_path, 
     assert export_files(out) == {"grid.json": grid.encode()}
 
 
-def test_an_episode_option_that_agrees_with_an_episode_dir_is_taken(tmp_path, capsys):
-    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+@pytest.mark.parametrize("index", [0, 3])
+def test_an_episode_dir_is_taken_whatever_its_index_and_an_episode_option_that_agrees(tmp_path, index):
+    """Without --episode, an episode folder is taken whatever its index (0 is only the
+    dataset's default); --episode with its own index is taken too, of the episode or the
+    dataset folder: the same export."""
+    episode = hand_made_episode(tmp_path / "ds" / f"episode_{index:04d}")
+    meta = json.loads((episode / "meta.json").read_text())
+    (episode / "meta.json").write_text(json.dumps(meta | {"episode": index}))
     assert main(["export", "wildtrack", str(episode), str(tmp_path / "a")]) == 0
-    assert main(["export", "wildtrack", str(episode), str(tmp_path / "b"), "--episode", "0"]) == 0
-    assert main(["export", "wildtrack", str(episode.parent), str(tmp_path / "c"), "--episode", "0"]) == 0
+    assert main(["export", "wildtrack", str(episode), str(tmp_path / "b"), "--episode", str(index)]) == 0
+    assert main(["export", "wildtrack", str(episode.parent), str(tmp_path / "c"), "--episode", str(index)]) == 0
     a = export_files(tmp_path / "a")
     assert "annotations_positions/00000000.json" in a
     assert export_files(tmp_path / "b") == a == export_files(tmp_path / "c")
@@ -460,20 +466,6 @@ def test_the_last_line_names_the_episode_the_layout_and_out(tmp_path, capsys):
         assert "100%" in err and "| 2/2 [" in err                # the bar counts images: 2 cameras x 1 frame
         grid = json.loads((tmp_path / layout / "grid.json").read_text())
         assert (grid["layout"], grid["undistorted"], grid["boxes"]) == (layout, bool(extra), "visible")
-
-
-def test_an_episode_folder_of_another_index_is_exported_without_episode(tmp_path):
-    """Without --episode, an episode folder is taken whatever its index (0 is only the
-    dataset's default); --episode with its own index is taken too."""
-    episode = hand_made_episode(tmp_path / "ds" / "episode_0003")
-    meta = json.loads((episode / "meta.json").read_text())
-    (episode / "meta.json").write_text(json.dumps(meta | {"episode": 3}))
-    assert main(["export", "wildtrack", str(episode), str(tmp_path / "a")]) == 0
-    assert main(["export", "wildtrack", str(episode), str(tmp_path / "b"), "--episode", "3"]) == 0
-    assert main(["export", "wildtrack", str(episode.parent), str(tmp_path / "c"), "--episode", "3"]) == 0
-    a = export_files(tmp_path / "a")
-    assert "annotations_positions/00000000.json" in a
-    assert export_files(tmp_path / "b") == a == export_files(tmp_path / "c")
 
 
 def test_overwrite_refuses_a_folder_whose_grid_json_is_a_folder(tmp_path, capsys):
