@@ -179,7 +179,7 @@ def test_the_radial_start_inverts_the_radial_factor_on_its_rising_branch(target,
     from scene.camera import _radial_start
 
     got = _radial_start(np.array([target]), np.array([-0.5, 0.0, 0.0, 0.0, 0.0]))
-    np.testing.assert_allclose(got[0], want, atol=1e-12)
+    np.testing.assert_allclose(got[0], want, rtol=0, atol=1e-12)
 
 
 def test_the_radial_start_of_a_lens_that_rises_for_ever():
@@ -187,7 +187,39 @@ def test_the_radial_start_of_a_lens_that_rises_for_ever():
     from scene.camera import _radial_start
 
     got = _radial_start(np.array([[0.0, 1.75], [38.0 * 0.6, 38.0 * 0.8]]), np.array([0.5, 0.0, 0.0, 0.0, 0.25]))
-    np.testing.assert_allclose(got, [[0.0, 1.0], [1.2, 1.6]], atol=1e-12)
+    np.testing.assert_allclose(got, [[0.0, 1.0], [1.2, 1.6]], rtol=0, atol=1e-12)
+
+
+def _radial(r, k1, k2, k3):
+    """r (1 + k1 r^2 + k2 r^4 + k3 r^6), the radial factor's image of the radius r."""
+    return r * (1 + k1 * r**2 + k2 * r**4 + k3 * r**6)
+
+
+def test_the_radial_start_of_a_lens_whose_slope_nearly_vanishes_rises_for_ever():
+    """The slope 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3 (s = r^2) is (s + 1)((s - 1)^2 + 0.005^2) / 1.000025:
+    its roots are -1 and the complex pair 1 +- 0.005i, so it stays above 0 (5e-5 at s = 1) and
+    the radial factor rises for ever; r = 1.2 comes back as itself, not as the turn at r = 1
+    that the pair's real part would be."""
+    from scene.camera import _radial_start
+
+    c = 1.000025
+    k1, k2, k3 = -0.999975 / c / 3, -1 / c / 5, 1 / c / 7
+    rd = _radial(1.2, k1, k2, k3)
+    got = _radial_start(np.array([[0.6 * rd, 0.8 * rd]]), np.array([k1, k2, 0.0, 0.0, k3]))
+    np.testing.assert_allclose(got, [[0.72, 0.96]], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("r, rd", [(0.7, None), (1.0, 0.8)])
+def test_the_radial_start_of_a_lens_that_turns_twice_stops_at_its_first_turn(r, rd):
+    """k1 = -1/6, k2 = -1/5, k3 = 1/14: the slope 1 - s/2 - s^2 + s^3/2 = (s - 1)(s - 2)(s + 1) / 2
+    falls to 0 at r = 1 (the image 0.705 there), then rises again past r = sqrt(2). A point
+    within reach gets its ray on the first rising branch; one beyond (0.8) the first turn, r = 1."""
+    from scene.camera import _radial_start
+
+    k1, k2, k3 = -1 / 6, -1 / 5, 1 / 14
+    rd = _radial(r, k1, k2, k3) if rd is None else rd
+    got = _radial_start(np.array([[0.0, -rd]]), np.array([k1, k2, 0.0, 0.0, k3]))
+    np.testing.assert_allclose(got, [[0.0, -r]], rtol=0, atol=1e-12)
 
 
 def test_the_polishing_error_is_in_pixels_of_each_axis():
