@@ -117,6 +117,12 @@ def test_frozen_and_read_only():
         cam.number = 3
     with pytest.raises(ValueError):
         cam.K[0, 0] = 1.0
+    for derived in (cam.center_world, cam.xy):
+        with pytest.raises(ValueError, match="read-only"):
+            derived[0] = 1.0
+    floor = FloorCamera(1, [0.5, 0.5], 0.0, 1.0)
+    with pytest.raises(ValueError, match="read-only"):
+        floor.xy[0] = 1.0
 
 
 def _edited(text: str, old: str, new: str) -> str:
@@ -649,7 +655,8 @@ def test_a_scene_with_a_floor_camera_among_calibrated_ones_is_not_calibrated():
 GOOD_K = np.array([[500.0, 0.0, 319.5], [0.0, 500.0, 239.5], [0.0, 0.0, 1.0]])
 
 
-@pytest.mark.parametrize("R", [np.diag([1.0, 1.0, -1.0]), 1.001 * np.eye(3)])    # a mirror; 0.2 % too long
+@pytest.mark.parametrize("R", [np.diag([1.0, 1.0, -1.0]), 1.001 * np.eye(3), (1 + 1e-5) * np.eye(3)])
+# a mirror; R R^T 0.2 % off the identity; 2e-5 off, past the 1e-6 it allows
 def test_a_mirror_or_a_stretched_rotation_is_refused(R):
     with pytest.raises(ValueError, match=r"^camera.R: expected a rotation matrix$"):
         Camera(1, GOOD_K, np.zeros(5), R, np.zeros(3), 640, 480)
@@ -696,3 +703,15 @@ def test_a_floor_cameras_field_of_view_is_checked_in_degrees_at_its_edges():
             FloorCamera(1, [0.0, 0.0], 0.0, np.radians(degrees))
     with pytest.raises(ValueError, match=r"^camera.number: expected an integer >= 1, got 0$"):
         FloorCamera(0, [0.0, 0.0], 0.0, 1.0)
+
+
+@pytest.mark.parametrize("fov", [0.0, -1.0, np.nan, np.inf])
+def test_a_floor_cameras_field_of_view_must_be_a_positive_number(fov):
+    with pytest.raises(ValueError, match=r"^camera.fov: expected a finite number > 0, got "):
+        FloorCamera(1, [0.0, 0.0], 0.0, fov)
+
+
+@pytest.mark.parametrize("xy", [[0.0, 0.0, 1.0], [0.0, np.nan]])
+def test_a_floor_cameras_position_must_be_two_finite_numbers(xy):
+    with pytest.raises(ValueError, match=r"^camera.xy: expected "):
+        FloorCamera(1, xy, 0.0, 1.0)
