@@ -392,3 +392,51 @@ def test_arriving_clears_the_steps_a_walker_was_blocked(monkeypatch):
     np.testing.assert_allclose(pos[:, 0], [[0.0, 0.0], [0.0, 0.0], [0.1, 0.0], [0.1, 0.0], [0.1, 0.0]], atol=1e-12)
     np.testing.assert_allclose(pos[:, 1, 0], [0.2, 0.3, 0.4, 0.5, 0.6], atol=1e-12)
     assert drawn == [0, 0, 0, 1, 3]                # the three at the start; the walker in steps 2 and 4
+
+
+@pytest.mark.parametrize("radius", [0.0, -1.0, np.nan])
+def test_a_circle_needs_a_positive_radius(radius):
+    with pytest.raises(ValueError, match=r"^radius: expected a finite number > 0, got "):
+        circle_polygon(radius)
+
+
+def test_random_drop_draws_1024_points_for_a_place_before_giving_up():
+    rng = _Counting(0)
+    with pytest.raises(ValueError, match=r"^radii: could not place a disc of radius 0.1 in the room$"):
+        random_drop(SLIVER, [0.1], rng)
+    assert rng.points == 64 * 16
+
+
+def test_a_walk_draws_4096_points_for_a_destination_before_giving_up():
+    from scene.motion import _inner_regions
+
+    start = np.array(_inner_regions(SLIVER, np.array([0.1]))[0].centroid.coords)
+    rng = _Counting(0)
+    with pytest.raises(ValueError, match=r"^radii: could not draw a destination for person 1"):
+        random_waypoint(SLIVER, [0.1], 3, 0.1, 1.0, rng, initial=start)
+    assert rng.points == 4096
+
+
+def test_random_drop_keeps_discs_that_just_touch(monkeypatch):
+    """The second disc's centre 0.2 m from the first's, the sum of their radii: no overlap."""
+    from scene import motion
+
+    places = iter([np.array([0.0, 0.0]), np.array([0.2, 0.0])])
+    monkeypatch.setattr(motion, "_sample_in", lambda region, rng, tries: next(places, None))
+    np.testing.assert_array_equal(random_drop(CIRCLE, [0.1, 0.1], np.random.default_rng(0)), [[0.0, 0.0], [0.2, 0.0]])
+
+
+def test_discs_as_large_as_the_room_pass_the_area_check():
+    """One disc of area pi in a room of area pi: not refused for its area (only more than the
+    room's is), but because it does not fit across the room's 1 m."""
+    room = box(0.0, 0.0, np.pi, 1.0)
+    assert np.pi * 1.0**2 == room.area
+    with pytest.raises(ValueError, match=r"^radii: a disc of radius 1.0 does not fit in the room$"):
+        random_drop(room, [1.0], np.random.default_rng(0))
+
+
+def test_a_walker_passing_someone_right_beside_it_walks_straight_on(monkeypatch):
+    """A person 0.25 m to its right (gap 0.05 m, under two steps) but exactly abeam, not ahead:
+    it is not approaching them, so it keeps its line (steering would turn it back, (-1, 0))."""
+    pos = _walk_past_standing(monkeypatch, [[0.0, 0.0], [0.0, -0.25]], [0.8, 0.0], 2)
+    np.testing.assert_allclose(pos[1, 0], [0.1, 0.0], atol=1e-12)
