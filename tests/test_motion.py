@@ -440,3 +440,22 @@ def test_a_walker_passing_someone_right_beside_it_walks_straight_on(monkeypatch)
     it is not approaching them, so it keeps its line (steering would turn it back, (-1, 0))."""
     pos = _walk_past_standing(monkeypatch, [[0.0, 0.0], [0.0, -0.25]], [0.8, 0.0], 2)
     np.testing.assert_allclose(pos[1, 0], [0.1, 0.0], atol=1e-12)
+
+
+def test_walking_clears_the_steps_a_walker_was_blocked(monkeypatch):
+    """Walker (0.05 m steps) towards (0.1, 0): in step 1 a person at (0.1, 0.175), walking off
+    up, lets it make only a sixteenth of its step (0.003 m: blocked); in step 2 a full step
+    (walking); in steps 3 and 4 a person standing at (0.2532, 0) keeps it from its destination
+    (blocked, blocked). With patience 2 it draws a new one in step 4, not in step 3: walking
+    in step 2 cleared the block of step 1."""
+    from scene import motion
+
+    steps, drawn = [], []
+    goals = iter([np.array([0.1, 0.0]), np.array([0.1, 0.8]), np.array([0.5, 0.0])])
+    monkeypatch.setattr(motion, "_sample_in",
+                        lambda region, rng, tries: (drawn.append(len(steps)), next(goals, np.array([-0.5, 0.5])))[1])
+    pos = random_waypoint(CIRCLE, [0.1] * 3, 5, 0.1, [0.5, 1.0, 0.0], np.random.default_rng(0),
+                          initial=[[0.0, 0.0], [0.1, 0.175], [0.2532, 0.0]], patience=2, progress=steps.append)
+    np.testing.assert_allclose(pos[:, 0, 0], [0.0, 0.05 / 16, 0.05 / 16 + 0.05, 0.053125, 0.053125], atol=1e-12)
+    np.testing.assert_allclose(pos[:, 0, 1], 0.0, atol=1e-12)
+    assert drawn == [0, 0, 0, 3]                   # the three at the start; the walker in step 4
