@@ -689,6 +689,12 @@ def test_the_field_of_view_of_an_off_centre_camera_spans_its_image_edges():
     assert np.degrees(cam.hfov) == pytest.approx(np.degrees(np.arctan(100.5 / 500) + np.arctan(539.5 / 500)))
 
 
+@pytest.mark.parametrize("position", [[1.0, 2.0], [1.0, 2.0, np.nan]])
+def test_a_camera_from_a_pose_needs_a_position_of_three_finite_numbers(position):
+    with pytest.raises(ValueError, match=r"^camera.position: expected "):
+        Camera.from_pose(1, position, 0.0, 0.0, 640, 480, 1.0, np.zeros(5))
+
+
 def test_camera_names_have_two_digits_at_least():
     assert Camera(5, GOOD_K, np.zeros(5), np.eye(3), np.zeros(3), 640, 480).name == "cam05"
     assert Camera(123, GOOD_K, np.zeros(5), np.eye(3), np.zeros(3), 640, 480).name == "cam123"
