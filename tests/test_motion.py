@@ -459,3 +459,67 @@ def test_walking_clears_the_steps_a_walker_was_blocked(monkeypatch):
     np.testing.assert_allclose(pos[:, 0, 0], [0.0, 0.05 / 16, 0.05 / 16 + 0.05, 0.053125, 0.053125], atol=1e-12)
     np.testing.assert_allclose(pos[:, 0, 1], 0.0, atol=1e-12)
     assert drawn == [0, 0, 0, 3]                   # the three at the start; the walker in step 4
+
+
+def test_a_walker_exactly_two_steps_from_touching_someone_turns(monkeypatch):
+    """A gap of 0.2 m (0.4 - 0.1 - 0.1 rounds to 1 ulp over it) is two steps of 0.1 m: within
+    them, so the first step is already the tangent, turned clockwise."""
+    pos = _walk_past_standing(monkeypatch, [[-0.4, 0.0], [0.0, 0.0]], [0.75, 0.0], 2)
+    np.testing.assert_allclose(pos[1, 0], [-0.4, -0.1], atol=1e-12)
+
+
+def test_a_walker_stopped_a_millimetre_short_of_its_destination_has_not_arrived(monkeypatch):
+    """Its destination 2 mm ahead is under a person standing at 0.2015 m: it gets half way
+    (1 mm, under a tenth of a step: blocked) and keeps that destination: it draws no new one."""
+    from scene import motion
+
+    steps, drawn = [], []
+    goals = iter([np.array([0.002, 0.0]), np.array([0.5, 0.5])])
+    monkeypatch.setattr(motion, "_sample_in",
+                        lambda region, rng, tries: (drawn.append(len(steps)), next(goals, np.array([-0.5, 0.0])))[1])
+    pos = random_waypoint(CIRCLE, [0.1, 0.1], 2, 0.1, [1.0, 0.0], np.random.default_rng(0),
+                          initial=[[0.0, 0.0], [0.2015, 0.0]], progress=steps.append)
+    np.testing.assert_allclose(pos[1, 0], [0.001, 0.0], atol=1e-12)
+    assert drawn == [0, 0]
+
+
+def test_destinations_are_drawn_where_each_persons_centre_may_be(monkeypatch):
+    """Radii 0.1 and 0.3 m in the 360-gon of circumradius 1: each destination comes from the
+    room shrunk by that person's radius, a 360-gon of apothem cos(pi / 360) - r and area
+    360 (cos(pi / 360) - r)^2 tan(pi / 360), at the start and after arriving."""
+    from scene import motion
+
+    areas = []
+    goals = iter([np.array([-0.5, 0.5]), np.array([0.35, 0.0]), np.array([0.35, 0.05])])
+    monkeypatch.setattr(motion, "_sample_in",
+                        lambda region, rng, tries: (areas.append(region.area), next(goals, np.array([0.3, 0.0])))[1])
+    random_waypoint(CIRCLE, [0.1, 0.3], 3, 0.1, [0.0, 1.0], np.random.default_rng(0),
+                    initial=[[-0.5, 0.0], [0.3, 0.0]])
+    want = [360 * (np.cos(np.pi / 360) - r) ** 2 * np.tan(np.pi / 360) for r in (0.1, 0.3, 0.3, 0.3)]
+    np.testing.assert_allclose(areas, want, rtol=1e-9)
+
+
+def test_the_region_of_a_centre_rounds_a_rooms_inner_corner():
+    """An L of two 2 x 1 m arms shrunk by 0.1 m: arms 1.8 x 0.8 m overlapping in 0.8 x 0.8 m,
+    and at the inner corner a 0.1 m square less a quarter disc of radius 0.1 m."""
+    from scene.motion import _inner_regions
+
+    room = box(0.0, 0.0, 2.0, 1.0).union(box(0.0, 0.0, 1.0, 2.0))
+    want = 2 * 1.8 * 0.8 - 0.8 * 0.8 + 0.1**2 * (1 - np.pi / 4)
+    assert abs(_inner_regions(room, np.array([0.1]))[0].area - want) < 1e-5
+
+
+def test_a_boxed_in_walker_draws_its_new_destination_where_its_centre_may_be(monkeypatch):
+    """Person 1 (radius 0.1 m) boxed in by four others, person 0 (radius 0.2 m) standing far
+    off: after two blocked steps its new destination comes from the room shrunk by 0.1 m
+    (the area of a 360-gon of apothem cos(pi / 360) - 0.1), not by person 0's 0.2 m."""
+    from scene import motion
+
+    areas = []
+    monkeypatch.setattr(motion, "_sample_in",
+                        lambda region, rng, tries: (areas.append(region.area), np.array([0.8, 0.0]))[1])
+    ring = 0.21 * np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    random_waypoint(CIRCLE, [0.2] + [0.1] * 5, 3, 0.1, [0.0, 1.0, 0, 0, 0, 0], np.random.default_rng(0),
+                    initial=np.vstack([[-0.6, 0.5], [0.0, 0.0], ring]), patience=2)
+    area = [360 * (np.cos(np.pi / 360) - r) ** 2 * np.tan(np.pi / 360) for r in (0.2, 0.1)]
+    np.testing.assert_allclose(areas, [area[0]] + [area[1]] * 6, rtol=1e-9)
