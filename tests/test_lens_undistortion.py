@@ -178,6 +178,28 @@ def test_every_pixel_of_a_lens_that_folds_beyond_them_gets_its_ray_before_the_fo
     assert (du[:, 0] * dv[:, 1] - du[:, 1] * dv[:, 0]).min() > 0
 
 
+@pytest.mark.parametrize("K, dist, width, height", [
+    # polished from OpenCV's ray, some pixels reach a ray past the fold first: the radial start's is taken
+    (np.array([[4.36, 0.0, 1.13], [0.0, 4.36, 12.63], [0.0, 0.0, 1.0]]), [0.119, 0.113, 0.01, -0.001, -0.023], 8, 15),
+    # strong barrel distortion and tangential terms: Newton's steps need the whole determinant
+    (np.array([[11.43, 0.0, 9.63], [0.0, 11.43, 4.3], [0.0, 0.0, 1.0]]), [-0.404, -0.128, 0.021, -0.011, 0.146], 20, 45),
+])
+def test_every_pixel_of_a_wide_small_lens_gets_the_ray_before_its_fold(K, dist, width, height):
+    """Every pixel, edges included, gets a ray that cv2.projectPoints sends back within 1e-9 px
+    of it, where the projection keeps its orientation (a positive determinant of its
+    derivative, by central differences)."""
+    from scene.camera import undistort_points
+
+    dist = np.array(dist)
+    uv = _pixel_grid(width, height)
+    rays = undistort_points(uv, K, dist)
+    assert np.hypot(*(_project(rays, K, dist) - uv).T).max() < 1e-9
+    h = 1e-6
+    du = (_project(rays + [h, 0], K, dist) - _project(rays - [h, 0], K, dist)) / (2 * h)
+    dv = (_project(rays + [0, h], K, dist) - _project(rays - [0, h], K, dist)) / (2 * h)
+    assert (du[:, 0] * dv[:, 1] - du[:, 1] * dv[:, 0]).min() > 0
+
+
 @pytest.mark.parametrize("target, want", [
     ([0.4375 * 0.6, 0.4375 * 0.8], [0.3, 0.4]),             # r = 0.5: 0.5 - 0.5 * 0.5**3 = 0.4375
     ([0.0, -(0.25 - 0.5 * 0.25**3)], [0.0, -0.25]),
