@@ -183,6 +183,8 @@ def test_every_pixel_of_a_lens_that_folds_beyond_them_gets_its_ray_before_the_fo
     (np.array([[4.36, 0.0, 1.13], [0.0, 4.36, 12.63], [0.0, 0.0, 1.0]]), [0.119, 0.113, 0.01, -0.001, -0.023], 8, 15),
     # strong barrel distortion and tangential terms: Newton's steps need the whole determinant
     (np.array([[11.43, 0.0, 9.63], [0.0, 11.43, 4.3], [0.0, 0.0, 1.0]]), [-0.404, -0.128, 0.021, -0.011, 0.146], 20, 45),
+    # pincushion distortion: a damped step that succeeds grows back to at most a whole Newton step
+    (np.array([[10.83, 0.0, 17.2], [0.0, 10.83, 24.76], [0.0, 0.0, 1.0]]), [0.177, 0.234, 0.017, 0.008, -0.064], 23, 45),
 ])
 def test_every_pixel_of_a_wide_small_lens_gets_the_ray_before_its_fold(K, dist, width, height):
     """Every pixel, edges included, gets a ray that cv2.projectPoints sends back within 1e-9 px
