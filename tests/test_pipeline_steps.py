@@ -146,6 +146,51 @@ def test_a_whole_valued_background_beyond_8_bits_is_not_wrapped():
         assert out[0, 0, 1:3].tolist() == [255, 255]
 
 
+def test_dark_difference_just_above_the_delta_is_foreground():
+    """Below the floor, |a - b|^2 = 1601 (one more than 40^2) is above a delta of 40 and
+    1600 is not: the squared delta is compared exactly, with nothing added."""
+    bg = np.full((1, 1, 2, 3), (9, 12, 0), np.uint8)           # |b| = 15: below the floor
+    fr = np.array([[[[10, 12, 40], [9, 12, 40]]]], np.uint8)   # differences (1, 0, 40), (0, 0, 40)
+    expected = np.linalg.norm(fr.astype(float) - bg.astype(float), axis=-1) > 40.0
+    assert expected[0, 0].tolist() == [True, False]
+    fg = colour_angle_foreground(fr, background_model(bg), 3.0, 25.0, 40.0)
+    np.testing.assert_array_equal(fg, expected)
+
+
+def test_angle_terms_with_other_thresholds_leave_the_original_alone():
+    """with_thresholds gives a new test over the same background; the original keeps its own
+    thresholds (a pixel 10 degrees off: foreground at 5 degrees, not at 20)."""
+    from pipeline.foreground import AngleTerms
+
+    b = np.array([200.0, 100.0, 50.0])
+    perp = np.cross(b, [0.0, 0.0, 1.0])
+    perp /= np.linalg.norm(perp)
+    u = b / np.linalg.norm(b)
+    a = np.linalg.norm(b) * (np.cos(np.radians(10)) * u + np.sin(np.radians(10)) * perp)
+    fr = np.rint(a).astype(np.uint8).reshape(1, 1, 1, 3)
+    bg = b.astype(np.uint8).reshape(1, 1, 1, 3)
+    off = np.degrees(np.arccos(a.round() @ b / (np.linalg.norm(a.round()) * np.linalg.norm(b))))
+    assert 9.5 < off < 10.5
+    terms = AngleTerms(bg.astype(np.float32), 5.0, 10.0, 20.0)
+    wide = terms.with_thresholds(20.0, 10.0, 20.0)
+    out = np.zeros((1, 1, 1), np.uint8)
+    assert wide.mask(fr, out)[0, 0, 0] == 0
+    assert terms.mask(fr, out)[0, 0, 0] == 255
+    assert wide._levels is terms._levels                       # the background is shared
+
+
+def test_angle_terms_refuse_frames_of_another_type():
+    """The compiled pass reads 8-bit levels: frames of the right shape in another dtype
+    (float 0..1, or 16-bit) are refused rather than compared as if they were levels."""
+    from pipeline.foreground import AngleTerms
+
+    terms = AngleTerms(np.full((1, 2, 3, 3), 100, np.float32), 3.0, 10.0, 20.0)
+    out = np.zeros((1, 2, 3), np.uint8)
+    for dtype in (np.float32, np.uint16, np.int64):
+        with pytest.raises(ValueError, match="frames: expected"):
+            terms.mask(np.full((1, 2, 3, 3), 100, dtype), out)
+
+
 def test_opening_removes_specks_keeps_blocks_and_edges():
     m = np.zeros((2, 10, 10), bool)
     m[0, 2:6, 2:6] = True
@@ -162,6 +207,27 @@ def test_opening_removes_specks_keeps_blocks_and_edges():
         ref = np.stack([ndimage.binary_opening(x, np.ones((min(k, 13),) * 2), border_value=0) for x in m])
         np.testing.assert_array_equal(open_masks(m, k), ref)
     assert open_masks(m, 9)[1].all() and not open_masks(m, 11).any()
+
+
+def test_opening_keeps_stacked_cameras_apart():
+    """Two rows of foreground at the bottom of one camera and one at the top of the next are
+    each thinner than a 3 x 3 square: opened per camera (scipy, zero border) both vanish.
+    Stacked without a zero row between the cameras they would make a band three rows tall
+    that survives; open_masks and the pipeline's own stacked pass keep them apart."""
+    h, w = 6, 8
+    m = np.zeros((2, h, w), bool)
+    m[0, h - 2:] = True
+    m[1, 0] = True
+    ref = np.stack([ndimage.binary_opening(x, np.ones((3, 3)), border_value=0) for x in m])
+    assert not ref.any()
+    np.testing.assert_array_equal(open_masks(m, 3), ref)
+    cams = [flat_camera(w, h), flat_camera(w, h)]
+    bg = np.full((2, h, w, 3), 120, np.uint8)
+    fr = bg.copy()
+    fr[m] = (200, 40, 40)
+    out = Pipeline(cams, PipelineParams(opening_kernel=3), bg).step(fr)
+    np.testing.assert_array_equal(colour_angle_foreground(fr, background_model(bg), 3.0, 25.0, 40.0), m)
+    np.testing.assert_array_equal(out.foreground, ref)
 
 
 @pytest.mark.parametrize("shape", [(7, 12), (12, 7)])
@@ -451,6 +517,38 @@ def test_a_run_cut_by_the_image_border_keeps_its_border_columns():
     x[0, 20:] = 40.0                      # and one by the right border
     s = median_threshold(spatial_smooth(x, 5), 7, 10.0)
     assert s[0, :5].all() and s[0, 21:].all() and not s[0, 9:17].any()
+
+
+def test_median_threshold_of_a_window_wider_than_a_byte_counts():
+    """A median window of 301 columns (kernels go up to 8191): the votes in a window pass
+    127 and must still be counted, as scipy's median filter has it."""
+    x = np.zeros((1, 700))
+    x[0, 100:600] = 9.0
+    ref = ndimage.median_filter(x[0], size=301, mode="nearest") > 5.0
+    assert ref[100:600].all() and not ref[:100].any() and not ref[600:].any()
+    np.testing.assert_array_equal(median_threshold(x, 301, 5.0)[0], ref)
+
+
+def test_spatial_smooth_of_fractional_counts_is_float64_accurate():
+    """Smoothed counts carry fractions (temporal smoothing, or a caller's own): the box mean
+    over 640 columns of values near 500 stays within float64 rounding of the direct mean."""
+    rng = np.random.default_rng(4)
+    x = rng.uniform(400.0, 500.0, (2, 640))
+    ref = np.stack([np.convolve(np.pad(r, 2, mode="edge"), np.ones(5), mode="valid") / 5 for r in x])
+    np.testing.assert_allclose(spatial_smooth(x, 5), ref, rtol=1e-11, atol=0)
+
+
+def test_smoothing_returns_new_arrays():
+    """spatial_smooth with no filter and temporal_smooth at the first frame (or alpha 1) give
+    new arrays: writing them (the pipeline keeps the result as its state) leaves the input alone."""
+    from pipeline.scanline import temporal_smooth
+
+    x = np.array([[1.0, 2.0, 3.0]])
+    for out in (spatial_smooth(x, 1), temporal_smooth(x, None, 0.5), temporal_smooth(x, x + 1, 1.0)):
+        out[0, 0] = 99.0
+        assert x.tolist() == [[1.0, 2.0, 3.0]]
+    state = np.array([[10.0, 0.0, 3.0]])
+    np.testing.assert_allclose(temporal_smooth(x, state, 0.25), [[0.25 * 1 + 0.75 * 10, 0.5, 3.0]])
 
 
 # --- run-length coding -----------------------------------------------------------------
