@@ -196,6 +196,7 @@ def test_replace_is_a_validated_copy():
     (np.zeros((2, 24, 32, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\)"),
     (np.zeros((1, 24, 32, 3), np.float32), r"frames: expected dtype uint8"),
     (np.zeros((1, 24, 32), np.uint8), r"frames: expected shape \(n_cams, H, W, 3\)"),
+    (np.zeros((24, 32, 3), np.uint8), r"frames: expected shape \(n_cams, H, W, 3\), got \(24, 32, 3\)"),
     (np.zeros((1, 24, 32, 4), np.uint8), r"frames: expected shape \(n_cams, H, W, 3\), got \(1, 24, 32, 4\)"),
     (np.zeros((1, 0, 32, 3), np.uint8), r"frames: expected non-empty images"),
 ])
@@ -222,6 +223,9 @@ def test_bad_background():
     # a float64 model (np.full of 100.0) and RGBA frames are not empty-room RGB frames
     with pytest.raises(ValueError, match=r"background: expected uint8 frames .* got float64 \(1, 1, 24, 32, 3\)"):
         Pipeline([cam()], background=np.full((1, 24, 32, 3), 100.0))
+    # frames in float32 are not a model: only (n_cams, H, W, 3) float32 is taken as one
+    with pytest.raises(ValueError, match=r"background: expected uint8 frames .* got float32 \(2, 1, 24, 32, 3\)"):
+        Pipeline([cam()], background=np.full((2, 1, 24, 32, 3), 100.0, np.float32))
     with pytest.raises(ValueError, match=r"background: expected uint8 frames .* got uint8 \(1, 1, 24, 32, 4\)"):
         background_model(np.full((1, 24, 32, 4), 100, np.uint8))
 
@@ -479,3 +483,24 @@ def test_a_camera_that_cannot_be_levelled_is_told_why():
     with pytest.raises(ValueError) as err:
         virtual_extent(lab_like(principal=(2000, 240)))
     assert str(err.value) == head + "its principal point 2000, 240 is far from the image's centre 319.5, 239.5" + tail
+
+
+def test_the_first_of_several_black_cameras_is_named():
+    """Cameras 7 and 9 both see all black: the error names camera 7, the first."""
+    cams = [scene.Camera.from_pose(n, [0, 0, 1.5], 0.0, 0.1, 32, 24, np.radians(50), [-0.1, 0, 0, 0, 0])
+            for n in (4, 7, 9)]
+    bg = np.zeros((3, 24, 32, 3), np.uint8)
+    bg[0] = 100
+    with pytest.raises(ValueError, match="background: camera 7 sees all black"):
+        Pipeline(cams, background=bg)
+    with pytest.raises(ValueError, match="background: camera index 1 sees all black"):
+        background_model(bg)
+
+
+def test_params_and_a_missing_background_are_refused_by_name():
+    """A mapping is not a PipelineParams (load_params or PipelineParams.from_mapping make one),
+    and with_params needs the background it shares."""
+    with pytest.raises(ValueError, match="^params: expected PipelineParams, got dict$"):
+        Pipeline([cam()], {"median_kernel": 3})
+    with pytest.raises(ValueError, match="background: not set"):
+        Pipeline([cam()]).with_params(PipelineParams(median_kernel=3))
