@@ -244,6 +244,26 @@ def test_a_kernel_as_tall_or_as_wide_as_the_mask_fits_it_once(shape):
     assert not open_masks(m, k + 2).any()
 
 
+def test_opening_of_kernel_one_returns_a_new_array():
+    """With no opening the masks are returned as a copy: writing the result leaves the input alone."""
+    m = np.zeros((1, 3, 4), bool)
+    m[0, 1, 2] = True
+    out = open_masks(m, 1)
+    out[0, 0, 0] = True
+    assert m.sum() == 1 and m[0, 1, 2]
+
+
+def test_angle_terms_keep_a_read_only_model_without_a_copy():
+    """A read-only float32 model (background_model's mean of frames, not whole levels) is kept
+    as it is: AngleTerms' background is that array, not a second copy of every pixel."""
+    from pipeline.foreground import AngleTerms
+
+    frames = np.stack([np.full((1, 2, 3, 3), 100, np.uint8), np.full((1, 2, 3, 3), 101, np.uint8)])
+    model = background_model(frames)
+    assert not model.flags.writeable and np.all(model == 100.5)
+    assert np.shares_memory(AngleTerms(model, 3.0, 25.0, 40.0).background, model)
+
+
 # --- rectification and the bearing map -------------------------------------------------
 
 def test_square_gives_its_columns_without_distortion():
@@ -737,9 +757,10 @@ def test_step_returns_the_intermediates_of_process():
 def test_at_the_width_limit_an_object_still_leaves_a_run_the_filters_keep(spatial, median, opening):
     """Pipeline.sight_range with an object's width: out to its far radius a 10 cm object spans
     at least w f / far rectified columns (f: the level camera's pixels per radian, fewest at its
-    centre) and w g / far raw pixels (g = raw_pixels_per_radian). That many columns, at the
-    fewest rows a new object is sent with (column_threshold / temporal_alpha), come through
-    the box and median filters, and a bar that many pixels across survives the opening.
+    centre) and w g / far raw pixels (g = raw_pixels_per_radian). The column centres in such a
+    span (one fewer than its width, at worst), at the fewest rows a new object is sent with
+    (column_threshold / temporal_alpha), come through the box and median filters, and a bar
+    over the pixel centres of its raw span survives the opening.
     (The first parameters make the columns the limit, the second the raw pixels.)"""
     from pipeline.nearfield import raw_pixels_per_radian
 
@@ -749,7 +770,7 @@ def test_at_the_width_limit_an_object_still_leaves_a_run_the_filters_keep(spatia
     near, far = Pipeline([cam], p).sight_range(1.75, object_width=0.1)
     assert near[0] == 0.0 and far[0] < 1.0                       # the width is the limit, not the height
     assert not near.flags.writeable and not far.flags.writeable  # the pipeline's cached answer
-    columns = int(np.floor(0.1 * Pipeline([cam], p).rectifier.K_virtual[0, 0, 0] / far[0] + 1e-9))
+    columns = int(np.ceil(0.1 * Pipeline([cam], p).rectifier.K_virtual[0, 0, 0] / far[0] - 1e-9)) - 1
     counts = np.zeros((1, 64))
     counts[0, 20:20 + columns] = p.column_threshold / p.temporal_alpha + 1e-6
     smoothed = p.temporal_alpha * spatial_smooth(counts, spatial)    # a new object after empty frames
@@ -910,3 +931,46 @@ def test_a_full_mask_rectifies_to_the_rays_that_land_on_the_raw_image(pitch_deg,
     near_edge = np.any(np.abs(np.concatenate([uv - lo, uv - hi], 1)) < 1e-3, axis=1).reshape(got.shape)
     assert want.sum() > 0.8 * want.size
     np.testing.assert_array_equal(got[~near_edge], want[~near_edge])
+
+
+def test_a_new_background_starts_a_new_sequence():
+    """set_background forgets the temporal state: after it, an empty frame gives empty
+    scanlines, as in a fresh pipeline, not the decaying trace of the person seen before."""
+    cam = flat_camera()
+    bg = np.full((1, 48, 64, 3), 120, np.uint8)
+    fr = bg.copy()
+    fr[0, 4:44, 30:34] = (200, 40, 40)
+    p = PipelineParams(opening_kernel=1, spatial_kernel=1, median_kernel=1, temporal_alpha=0.5,
+                       column_threshold=12.0)
+    pipe = Pipeline([cam], p, bg)
+    assert pipe.process(fr)[0, 30:34].all()                    # 40 rows > 12
+    pipe.set_background(bg)
+    assert not pipe.process(bg).any()                          # 0.5 * 40 = 20 > 12 had the state stayed
+
+
+def test_process_with_truth_marks_each_cameras_own_rows():
+    """Truth only in the top two rows of the second and third cameras (nothing in front of
+    any): it is found in each, with the opening's zero rows between the cameras."""
+    cams = [flat_camera(), flat_camera(), flat_camera()]
+    bg = np.full((3, 48, 64, 3), 120, np.uint8)
+    labels = np.zeros((3, 48, 64), np.int32)
+    labels[1:, :2, 20:40] = 1
+    pipe = Pipeline(cams, PipelineParams(opening_kernel=5), bg)
+    scan, truth = pipe.process_with_truth(bg, labels)
+    assert not scan.any()
+    assert not truth[0].any() and truth[1:].any(axis=1).all()
+    np.testing.assert_array_equal(truth, pipe.ground_truth(labels)[1])
+
+
+def test_the_true_sight_range_of_an_objects_width_is_one_column_and_one_raw_pixel():
+    """With truth, an object of a given width needs one row, one rectified column and one raw
+    pixel across, whatever the filters: the range of pipeline.sight_range with those."""
+    from pipeline import sight_range
+    from pipeline.nearfield import raw_pixels_per_radian
+
+    cam = flat_camera()
+    pipe = Pipeline([cam], PipelineParams(spatial_kernel=9, median_kernel=11, opening_kernel=15))
+    near, far = pipe.sight_range(1.75, truth=True, object_width=0.02)
+    want = sight_range([cam], 1.75, 1.0, pipe.rectifier.width, 0.02, 1.0, 1.0, [raw_pixels_per_radian(cam)])
+    assert far[0] < pipe.sight_range(1.75, truth=True)[1][0]  # the width is the limit
+    assert (near[0], far[0]) == (want[0][0], want[1][0])
