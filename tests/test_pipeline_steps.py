@@ -974,3 +974,29 @@ def test_the_true_sight_range_of_an_objects_width_is_one_column_and_one_raw_pixe
     want = sight_range([cam], 1.75, 1.0, pipe.rectifier.width, 0.02, 1.0, 1.0, [raw_pixels_per_radian(cam)])
     assert far[0] < pipe.sight_range(1.75, truth=True)[1][0]  # the width is the limit
     assert (near[0], far[0]) == (want[0][0], want[1][0])
+
+
+def test_views_that_are_not_contiguous_are_taken_as_their_values():
+    """A BGR image flipped to RGB by a view (``[..., ::-1]``), labels in Fortran order and a
+    read-only model subsampled by a strided view give what their contiguous copies give."""
+    cams = [flat_camera(), flat_camera()]
+    rng = np.random.default_rng(3)
+    bg = rng.integers(60, 200, (2, 48, 64, 3)).astype(np.uint8)
+    fr = bg.copy()
+    fr[:, 10:30, 20:30] = (200, 40, 40)
+    labels = np.zeros((2, 48, 64), np.int32)
+    labels[:, 10:30, 20:30] = 1
+    bgr = np.ascontiguousarray(fr[..., ::-1])
+    p = PipelineParams(opening_kernel=3, median_kernel=1, column_threshold=5.0)
+    mine, plain = Pipeline(cams, p, bg), Pipeline(cams, p, bg)
+    scan, truth = mine.process_with_truth(bgr[..., ::-1], np.asfortranarray(labels))
+    want_scan, want_truth = plain.process_with_truth(fr, labels)
+    assert want_scan.any() and want_truth.any()
+    np.testing.assert_array_equal(scan, want_scan)
+    np.testing.assert_array_equal(truth, want_truth)
+    big = np.repeat(np.repeat(bg.astype(np.float32) + 0.5, 2, axis=1), 2, axis=2)   # not whole levels
+    big.setflags(write=False)                      # read-only, as background_model's: kept, not copied
+    model = big[:, ::2, ::2]
+    assert not model.flags.c_contiguous
+    np.testing.assert_array_equal(colour_angle_foreground(fr, model, 3.0, 25.0, 40.0),
+                                  colour_angle_foreground(fr, model.copy(), 3.0, 25.0, 40.0))
