@@ -499,8 +499,13 @@ def test_the_first_of_several_black_cameras_is_named():
 
 def test_params_and_a_missing_background_are_refused_by_name():
     """A mapping is not a PipelineParams (load_params or PipelineParams.from_mapping make one),
-    and with_params needs the background it shares."""
+    with_params needs the background it shares, and background_model a camera axis."""
     with pytest.raises(ValueError, match="^params: expected PipelineParams, got dict$"):
         Pipeline([cam()], {"median_kernel": 3})
     with pytest.raises(ValueError, match="background: not set"):
         Pipeline([cam()]).with_params(PipelineParams(median_kernel=3))
+    with pytest.raises(ValueError, match="background: not set"):
+        _ = Pipeline([cam()]).background
+    # one image without the camera axis is neither (n_cams, H, W, 3) nor (n_frames, n_cams, H, W, 3)
+    with pytest.raises(ValueError, match=r"background: expected uint8 frames .* got uint8 \(24, 32, 3\)"):
+        background_model(np.full((24, 32, 3), 100, np.uint8))

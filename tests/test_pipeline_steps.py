@@ -571,6 +571,15 @@ def test_smoothing_returns_new_arrays():
     np.testing.assert_allclose(temporal_smooth(x, state, 0.25), [[0.25 * 1 + 0.75 * 10, 0.5, 3.0]])
 
 
+def test_a_single_true_pixel_makes_its_column_true():
+    from pipeline.scanline import true_scanlines
+
+    m = np.zeros((2, 3, 4), bool)
+    m[0, 2, 1] = True
+    m[1, :, 3] = True
+    assert true_scanlines(m).tolist() == [[False, True, False, False], [False, False, False, True]]
+
+
 # --- run-length coding -----------------------------------------------------------------
 
 @settings(max_examples=200, deadline=None)
