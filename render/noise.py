@@ -13,7 +13,7 @@ approximates, honestly:
 
 - within one frame every sample is an independent rounded Gaussian (exact);
 - at a fixed pixel the samples of successive frames are independent unless two
-  windows start at the same offset (probability ``1 / POOL_EXTRA`` per pair);
+  windows start at the same offset (probability ``1 / (POOL_EXTRA + 1)`` per pair);
 - two windows that overlap share samples, shifted: one camera's noise can be a
   translated copy of part of another frame's. Per-pixel statistics cannot tell;
   cross-correlating two frames at exactly that lag could;
@@ -34,7 +34,7 @@ import numpy as np
 #: Offset added to the signed noise so that it fits in uint8.
 BIAS = 128
 
-#: How many distinct window offsets the pool offers (the pool holds one frame more).
+#: The pool's length beyond one frame: window offsets run over 0..POOL_EXTRA, both ends included.
 POOL_EXTRA = 1 << 23
 
 #: The pool's fixed seed: the pool is part of the renderer, like the room's texture.
