@@ -586,7 +586,9 @@ def test_a_single_true_pixel_makes_its_column_true():
 @given(hnp.arrays(bool, st.integers(1, 700)))
 def test_rle_round_trip(s):
     runs = rle_encode(s)
-    np.testing.assert_array_equal(rle_decode(runs, s.size), s)
+    decoded = rle_decode(runs, s.size)
+    assert decoded.dtype == bool
+    np.testing.assert_array_equal(decoded, s)
     assert runs.sum() == s.size and np.all(runs[1:] > 0)
     assert scanline_bits(s[None])[0] == rle_bits(runs, s.size)
 
@@ -614,6 +616,18 @@ def test_a_run_length_takes_the_bits_of_the_width_itself(width, bits):
 def test_rle_decode_refuses_runs_that_do_not_make_the_width(runs):
     with pytest.raises(ValueError, match="runs: expected non-negative run lengths summing to width 4"):
         rle_decode(runs, 4)
+
+
+def test_an_empty_scanline_is_no_runs_and_decodes_back():
+    runs = rle_encode(np.zeros(0, bool))
+    assert runs.shape == (0,) and rle_bits(runs, 0) == 0
+    assert rle_decode(runs, 0).shape == (0,)
+
+
+@pytest.mark.parametrize("s", [np.array(True), np.zeros((2, 3), bool)])
+def test_rle_encode_refuses_what_is_not_one_scanline(s):
+    with pytest.raises(ValueError, match=r"scanline: expected shape \(W,\), got"):
+        rle_encode(s)
 
 
 # --- metrics ---------------------------------------------------------------------------
