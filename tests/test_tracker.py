@@ -81,6 +81,15 @@ def test_metrics_on_a_hand_computed_case():
         tracking_metrics(truth_ids, truth_xy, track_ids[:2], track_xy, 0.5)
 
 
+@pytest.mark.parametrize("short", range(4))
+def test_metrics_refuse_any_argument_with_another_number_of_frames(short):
+    """Two frames each, one argument cut to its first frame: zip would compare fewer frames."""
+    args = [[[0], [0]], [[[0.0, 0.0]], [[0.0, 0.0]]], [[7], [7]], [[[0.1, 0.0]], [[0.1, 0.0]]]]
+    args[short] = args[short][:1]
+    with pytest.raises(ValueError, match="same number of frames in every argument"):
+        tracking_metrics(*args, max_distance=0.5)
+
+
 def test_metrics_gate_is_a_distance_not_a_squared_distance():
     # 0.6 m away with max_distance 0.5 m: no match (0.36 m^2 is below 0.5, above 0.25)
     m = tracking_metrics([[0]], [[[0.0, 0.0]]], [[7]], [[[0.6, 0.0]]], 0.5)
@@ -144,6 +153,14 @@ def test_metrics_count_false_positives_and_misses():
     m = tracking_metrics(truth_ids, truth_xy, track_ids, track_xy, 0.5)
     assert m["false_positives"] == 1 and m["misses"] == 1 and m["matches"] == 1
     assert m["mota"] == 1 - (m["false_positives"] + m["misses"] + m["switches"]) / 2
+
+
+def test_false_positives_and_misses_are_not_taken_for_each_other():
+    """Two phantom track-frames and no miss, then one miss and no phantom: the counts differ."""
+    z = [[0.0, 0.0]]
+    m = tracking_metrics([[0], [0]], [z, z], [[7, 8, 9], []], [[[0.1, 0.0], [3.0, 3.0], [4.0, 0.0]], []], 0.5)
+    assert (m["false_positives"], m["misses"], m["matches"], m["switches"]) == (2, 1, 1, 0)
+    assert m["mota"] == pytest.approx(1 - (2 + 1) / 2)
 
 
 def test_matches_count_the_switch_frames_that_mse_averages_over():
