@@ -19,6 +19,7 @@ from pipeline import (
     cdnet_metrics,
     colour_angle_foreground,
     confusion,
+    evaluate,
     median_threshold,
     open_masks,
     rle_bits,
@@ -670,6 +671,26 @@ def test_metrics_empty_cases():
     m = cdnet_metrics(0, 0, 0, 10)
     assert (m["recall"], m["precision"], m["pwc"]) == (1.0, 1.0, 0.0)
     assert cdnet_metrics(0, 5, 0, 5)["f1"] == 0.0
+
+
+def test_confusion_refuses_a_prediction_of_another_shape():
+    """A (1,) prediction would broadcast against (3,) truth and be counted three times."""
+    with pytest.raises(ValueError, match=r"pred: expected the shape of the ground truth \(3,\), got \(1,\)"):
+        confusion([True], [True, False, True])
+
+
+@pytest.mark.parametrize("camera_axis", [1, -2])
+def test_evaluate_counts_per_camera_on_any_axis_in_plain_python_numbers(camera_axis):
+    # (frames, cameras, columns): camera 0 has 1 TP, 1 FP over its 4 columns; camera 1 has 1 FN
+    pred = np.array([[[1, 1], [0, 0]], [[0, 0], [0, 0]]], bool)
+    truth = np.array([[[1, 0], [0, 0]], [[0, 0], [1, 0]]], bool)
+    r = evaluate(pred, truth, camera_axis=camera_axis)
+    assert [(c["tp"], c["fp"], c["fn"], c["tn"]) for c in r["per_camera"]] == [(1, 1, 0, 2), (0, 0, 1, 3)]
+    assert (r["tp"], r["fp"], r["fn"], r["tn"]) == (1, 1, 1, 5)
+    assert r["per_camera"][0]["precision"] == 0.5 and r["per_camera"][1]["recall"] == 0.0
+    assert r["pwc"] == 25.0
+    leaves = [v for k, v in r.items() if k != "per_camera"] + [v for c in r["per_camera"] for v in c.values()]
+    assert {type(v) for v in leaves} == {int, float}          # JSON-ready: no NumPy scalars
 
 
 # --- production equals the straightforward reference -----------------------------------
