@@ -76,3 +76,22 @@ def test_a_runs_metrics_are_its_frames_counted_plainly(sequence):
     assert pixels[:, 0].min() > 0 and pixels[:, 1:3].sum() > 0                # people found, and some misses
     np.testing.assert_array_equal(result.pixel_counts, pixels)
     assert [m["pixel"][k] for k in ("tp", "fp", "fn", "tn")] == pixels.sum(0).tolist()
+    assert [c["recall"] for c in m["pixel"]["per_camera"]] == pytest.approx(pixels[:, 0] / (pixels[:, 0] + pixels[:, 2]))
+
+
+def test_a_run_without_labels_has_no_truth_and_reports_each_frame(sequence):
+    cams, bg, frames, _ = sequence
+    ticks = []
+    result = run_sequence(Pipeline(cams, PipelineParams(column_threshold=3.0), bg), frames[:3],
+                          progress=lambda: ticks.append(1))
+    assert len(ticks) == 3
+    assert result.scanlines.shape == (3, 2, 160)
+    assert result.gt_scanlines is None and result.pixel_counts is None
+    m = result.metrics()
+    assert "f1" not in m and "pixel" not in m and m["frames"] == 3
+
+
+def test_a_run_of_no_frames_is_refused(sequence):
+    cams, bg, *_ = sequence
+    with pytest.raises(ValueError, match=r"^frames: expected at least one frame after the background$"):
+        run_sequence(Pipeline(cams, PipelineParams(column_threshold=3.0), bg), [])
