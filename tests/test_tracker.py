@@ -326,3 +326,67 @@ def test_a_confirmed_track_wins_a_detection_within_a_micrometre_over_a_tentative
     assert tracker.confirmed.tolist() == [True, False]
     ids, _ = tracker.step([[1.5 + 1e-7, 1.0]])
     assert ids.tolist() == [0] and tracker.ids.tolist() == [0]
+
+
+def test_the_gate_is_a_euclidean_distance():
+    """(0.4, 0.4) m from a stationary track is 0.566 m away, outside the 0.5 m gate though
+    each coordinate is inside it: a new track; (0.3, 0.3) m is 0.424 m away: a match."""
+    for offset, same in ((0.4, False), (0.3, True)):
+        tracker = Tracker()
+        tracker.step([[1.0, 1.0]])
+        tracker.step([[1.0 + offset, 1.0 + offset]])
+        assert tracker.ids.tolist() == ([0] if same else [1])
+
+
+def test_a_detection_outside_every_gate_does_not_steer_the_matching():
+    """Tracks A at (0, 0) and B at (3, 0), gate 2; detections (1.4, 0) (1.4 m from A, 1.6 m
+    from B) and (-5, 0) (outside both gates). A takes the first: pairing B with it and A
+    with the far one costs less in total (1.6 + 5 < 1.4 + 8), but that pair is no match."""
+    tracker = Tracker(TrackerParams(dt=0.1, gate=2.0, confirm_hits=1))
+    tracker.step([[0.0, 0.0], [3.0, 0.0]])
+    ids, xy = tracker.step([[1.4, 0.0], [-5.0, 0.0]])
+    assert ids.tolist() == [0, 2] and tracker.missed.tolist() == [0, 1, 0]
+    assert 0 < xy[0, 0] < 1.4 and xy[1].tolist() == [-5.0, 0.0]
+
+
+def test_matching_maximises_the_matches_inside_a_gate_of_any_size():
+    """The matching of test_matching_first_maximises_the_matches_inside_the_gate scaled by
+    1000: with a 2 km gate, both tracks still match (A the second detection, B the first),
+    though A to the first alone costs 1.5 km, less than the two matches' 3 km."""
+    tracker = Tracker(TrackerParams(dt=0.1, gate=2000.0, confirm_hits=1))
+    tracker.step([[0.0, 0.0], [3000.0, 0.0]])
+    ids, xy = tracker.step([[1500.0, 0.0], [-1500.0, 0.0]])
+    assert ids.tolist() == [0, 1] and tracker.missed.tolist() == [0, 0]
+    assert xy[0, 0] < 0 and 1500 < xy[1, 0] < 3000
+
+
+def test_hits_count_consecutive_matches_and_restart_after_a_miss():
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=2, max_missed=3))
+    for _ in range(3):
+        tracker.step([[1.0, 1.0]])
+    assert tracker.hits.tolist() == [3]
+    tracker.step(np.zeros((0, 2)))
+    assert tracker.hits.tolist() == [0] and tracker.missed.tolist() == [1]
+    tracker.step([[1.0, 1.0]])
+    assert tracker.hits.tolist() == [1] and tracker.missed.tolist() == [0]
+
+
+def test_a_track_born_beside_an_established_one_starts_from_the_birth_prior():
+    """B is born at z0 while A has been tracked for 10 frames; B's second frame is still the
+    textbook one-step update of test_the_second_frame_is_one_textbook_kalman_update_from_the_birth_prior
+    (B gets the birth covariance, A keeps its own)."""
+    dt, a, s = 0.2, 1.5, 0.1
+    tracker = Tracker(TrackerParams(dt=dt, accel_std=a, meas_std=s, confirm_hits=2))
+    far = [5.0, 5.0]
+    for _ in range(10):
+        tracker.step([far])
+    z0, z1 = np.array([2.0, 1.0]), np.array([2.12, 0.95])
+    tracker.step([far, z0])
+    np.testing.assert_allclose(tracker.P[1], np.diag([s**2, s**2, 1.0, 1.0]), rtol=0, atol=0)
+    ids, xy = tracker.step([far, z1])
+    p00 = s**2 + dt**2 + a**2 * dt**4 / 4
+    p01 = dt + a**2 * dt**3 / 2
+    k0, k1 = p00 / (p00 + s**2), p01 / (p00 + s**2)
+    assert ids.tolist() == [0, 1]
+    np.testing.assert_allclose(xy[1], z0 + k0 * (z1 - z0), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(tracker.x[1, 2:], k1 * (z1 - z0), rtol=0, atol=1e-12)
