@@ -505,6 +505,73 @@ def test_wedge_radius_is_twice_the_diagonal_of_the_box_with_the_cameras_plus_one
     assert wedge_radius(box(0, 0, 3, 4), np.array([[-3.0, 8.0]])) == 21.0
 
 
+def test_free_intervals_keep_a_gap_of_two_tenths_of_a_nanoradian_by_default():
+    """The default min_gap is 1e-10 rad: a gap of 2e-10 rad at the FOV edge stays, one of
+    5e-11 rad between two occlusions goes."""
+    from tasking.cones import free_intervals
+
+    lo = np.array([[-0.5, 0.2 + 5e-11]])
+    hi = np.array([[0.2, 1.0 - 2e-10]])
+    cam, a0, a1 = free_intervals(lo, hi, np.array([1.0]))
+    assert cam.tolist() == [0, 0]
+    np.testing.assert_allclose(a0, [-1.0, 1.0 - 2e-10], rtol=0, atol=1e-16)
+    np.testing.assert_allclose(a1, [-0.5, 1.0], rtol=0, atol=1e-16)
+
+
+def test_column_edges_extrapolate_each_ends_own_step():
+    """Columns at 0, 1, 3 and 6 rad: the outer edges lie half the first step (1) before the
+    first column and half the last step (3) after the last."""
+    from tasking.cones import column_edges
+
+    edges = column_edges(np.array([[0.0, 1.0, 3.0, 6.0], [6.0, 3.0, 1.0, 0.0]]))
+    np.testing.assert_allclose(edges, [[-0.5, 0.5, 2.0, 4.5, 7.5], [7.5, 4.5, 2.0, 0.5, -0.5]],
+                               rtol=0, atol=1e-15)
+
+
+def test_scanline_intervals_by_hand():
+    """Three cameras of four columns with uneven steps. Row 0 decreases through -pi: its
+    columns, in increasing order, are at u = 2.6, 3.0, 3.2, 3.4 rad less 2*pi, with edges at
+    2.4, 2.8, 3.1, 3.3, 3.5; the field of view is 1.1 rad about 2.95 rad (wrapped into
+    [-pi, pi)), and its runs (u = 2.6-3.0 and 3.4) occlude -0.55..0.15 and 0.35..0.55.
+    Row 1 (columns 0, 0.1, 0.3, 0.6; edges -0.05, 0.05, 0.2, 0.45, 0.75) has one run, of
+    its middle columns, and row 2 none: their unused slots are (-fov/2, -fov/2)."""
+    from tasking.cones import scanline_intervals, wrap_angle
+
+    u = np.array([2.6, 3.0, 3.2, 3.4])
+    bearings = np.array([wrap_angle(u)[::-1], [0.0, 0.1, 0.3, 0.6], [1.0, 1.1, 1.2, 1.3]])
+    scanlines = np.array([[True, False, True, True], [False, True, True, False], [False] * 4])
+    yaw, fov, lo, hi = scanline_intervals(bearings, scanlines)
+    np.testing.assert_allclose(yaw, [2.95, 0.35, 1.15], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fov, [1.1, 0.8, 0.4], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(lo, [[-0.55, 0.35], [-0.3, -0.4], [-0.2, -0.2]], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(hi, [[0.15, 0.55], [0.1, -0.4], [-0.2, -0.2]], rtol=0, atol=1e-12)
+
+
+def test_clip_to_fov_by_hand():
+    """Half FOV 1 rad. (0.5, 0.8) is kept as it is; (2, 2.5) lies beyond the FOV in every
+    copy; (2, 5.8) reaches into it only shifted by -2*pi, as (-1, 5.8 - 2*pi). Every empty
+    result is (-1, -1), including those clipped to the edge +1. Slots: the K intervals
+    unshifted, then shifted by -2*pi, then by +2*pi."""
+    from tasking.cones import clip_to_fov
+
+    lo, hi = clip_to_fov(np.array([[0.5, 2.0, 2.0]]), np.array([[0.8, 2.5, 5.8]]), np.array([1.0]))
+    e = -1.0
+    np.testing.assert_allclose(lo, [[0.5, e, e, e, e, -1.0, e, e, e]], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(hi, [[0.8, e, e, e, e, 5.8 - 2 * np.pi, e, e, e]], rtol=0, atol=1e-15)
+
+
+def test_a_wedge_without_near_field_has_nine_points_on_its_far_arc():
+    """A quarter wedge from (1, 1) of radius 2: the apex, nine points on the arc 2 m away,
+    the apex again; its area is eight isosceles triangles of apex angle pi/16."""
+    from tasking.cones import wedge_polygons
+
+    (w,) = wedge_polygons(np.array([[1.0, 1.0]]), np.array([0.0]), np.array([np.pi / 2]), 2.0)
+    ang = np.linspace(0.0, np.pi / 2, 9)
+    want = np.r_[[[0.0, 0.0]], 2.0 * np.c_[np.cos(ang), np.sin(ang)], [[0.0, 0.0]]] + 1.0
+    np.testing.assert_allclose(np.asarray(w.exterior.coords), want, rtol=0, atol=1e-12)
+    assert abs(w.area - 0.5 * 8 * np.sin(np.pi / 16) * 2.0**2) < 1e-12
+
+
 def test_wedge_polygons_with_near_and_far_radii_by_hand():
     # a quarter wedge from (1, 1), inner 0.5, sight radius 3 beyond the wedge length 2:
     # the far arc is at 2; ARC_POINTS on each arc, the inner arc at 0.5 / cos(step / 2)
