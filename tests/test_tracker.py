@@ -390,3 +390,24 @@ def test_a_track_born_beside_an_established_one_starts_from_the_birth_prior():
     assert ids.tolist() == [0, 1]
     np.testing.assert_allclose(xy[1], z0 + k0 * (z1 - z0), rtol=0, atol=1e-12)
     np.testing.assert_allclose(tracker.x[1, 2:], k1 * (z1 - z0), rtol=0, atol=1e-12)
+
+
+def test_the_gate_is_measured_from_the_prediction_not_the_last_position():
+    """A person walking 0.4 m a frame along x, tracked for 30 frames: the next detection,
+    0.7 m beyond the last one (outside the 0.5 m gate) but 0.3 m beyond where the track
+    predicts it, still matches the track."""
+    tracker = Tracker(TrackerParams(dt=0.1))
+    for t in range(30):
+        ids, _ = tracker.step([[0.4 * t, 1.0]])
+    ids_next, _ = tracker.step([[0.4 * 29 + 0.7, 1.0]])
+    assert ids.tolist() == [0] and ids_next.tolist() == [0] and tracker.ids.tolist() == [0]
+
+
+def test_estimates_keep_a_confirmed_track_that_missed_a_frame():
+    """A confirmed track coasting through a miss still gives tasking its prediction: the
+    stationary person at (1, 2) is still expected there."""
+    tracker = Tracker(TrackerParams(dt=0.1, confirm_hits=2, max_missed=3))
+    for _ in range(5):
+        tracker.step([[1.0, 2.0]])
+    tracker.step(np.zeros((0, 2)))
+    np.testing.assert_allclose(tracker.estimates(), [[1.0, 2.0]], rtol=0, atol=1e-9)
