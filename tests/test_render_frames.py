@@ -235,6 +235,58 @@ def test_raster_draw_clears_the_bands_it_draws():
         r.close()
 
 
+def test_raster_draw_returns_a_view_of_its_pixels_for_consecutive_bands():
+    """docs: band b is read into ``pixels[b]``; the result is a view of it when the bands
+    are consecutive (no copy per call), a copy in the bands' order otherwise."""
+    r = _raster([_quad(0.0, 0.0, 1.0, 0.5, ROOM, -1), _quad(0.0, 0.0, 0.5, 0.0, (1.0, 0.0, 0.0), 0)], 1,
+                n_tiles=3)
+    try:
+        three = np.repeat(EYE, 3, axis=0)
+        r.draw(three, np.zeros((1, 2)))                                   # the person in every band
+        px = r.draw(three[:2], np.full((1, 2), np.nan), bands=[1, 2])     # bands 1, 2: the room
+        assert px.base is r.pixels or px.base is r.pixels.base
+        assert np.shares_memory(px, r.pixels) and px.shape == (2, S, S, 4)
+        assert (px.reshape(-1, 4) == [51, 102, 153, 0]).all()
+        assert (r.pixels[0, S // 2, S // 2] == [255, 0, 0, 1]).all()     # band 0 not read again
+        px = r.draw(three[:2], np.zeros((1, 2)), bands=[2, 0])
+        assert not np.shares_memory(px, r.pixels)
+        assert (px[:, S // 2, S // 2] == [255, 0, 0, 1]).all()
+        assert (r.pixels[1, S // 2, S // 2] == [51, 102, 153, 0]).all()    # band 1 left as it was
+    finally:
+        r.close()
+
+
+def test_raster_hidden_people_stay_out_of_a_frustum_kilometres_wide():
+    """A person whose offset row is not finite (NaN, either coordinate, or infinite) is
+    hidden: not drawn even by a camera seeing 20 km across (1e-4 NDC per metre), near
+    flag or not. The person is a 4 km square at the origin: shown, it covers NDC
+    [-0.2, 0.2] both ways (a person moved 10 m would be drawn too). No non-finite offset
+    reaches OpenGL, where a NaN or infinite vertex is undefined: the person is moved to
+    ``HIDDEN``."""
+    from render.raster import HIDDEN
+
+    person = _quad(0.0, 0.0, 2000.0, 0.0, (1.0, 0.0, 0.0), 0)
+    r = _raster([_quad(0.0, 0.0, 2e4, 0.5, ROOM, -1), person], 1, n_tiles=2)       # the room: everywhere
+    wide = np.repeat(np.diag([1e-4, 1e-4, 1.0, 1.0]).astype(np.float32)[None], 2, axis=0)
+    try:
+        px = r.draw(wide, np.zeros((1, 2)), near=[False, True]).copy()
+        expected = np.zeros((S, S), bool)
+        expected[_px([-0.2, 0.2]), _px([-0.2, 0.2])] = True
+        for k in range(2):
+            assert np.array_equal(px[k, ..., 3] == 1, expected)
+        GL = r.GL
+        uniform = GL.glGetUniformLocation(r.program, "offsets[0]")
+        for row in ([np.nan, np.nan], [np.nan, 0.0], [0.0, np.nan], [0.0, np.inf], [-np.inf, 5.0]):
+            px = r.draw(wide, np.array([row]), near=[False, True])
+            assert (px.reshape(-1, 4) == [51, 102, 153, 0]).all(), row
+            # no non-finite vertex reaches OpenGL (undefined there): the person is at HIDDEN
+            got = np.zeros(2, np.float32)
+            GL.glGetUniformfv(r.program, uniform, got)
+            assert (got == [HIDDEN, HIDDEN]).all(), (row, got)
+    finally:
+        r.close()
+
+
 def test_raster_draw_people_reads_only_its_rectangles():
     """Over the stored room only the people are drawn, and each rectangle (rows top first
     as read, x0, y0, x1, y1 end exclusive) is read into ``out``; nothing else is touched,
@@ -273,6 +325,8 @@ def test_raster_checks_its_arguments():
         two = np.repeat(EYE, 2, axis=0)
         with pytest.raises(ValueError, match="view_projs: expected 1..2 cameras, got 3"):
             r.draw(np.repeat(EYE, 3, axis=0), np.zeros((1, 2)))
+        with pytest.raises(ValueError, match="view_projs: expected 1..2 cameras, got 0"):
+            r.draw(EYE[:0], np.zeros((1, 2)))
         for bands in ([0, 0], [1, 2], [-1, 0], [0]):
             with pytest.raises(ValueError, match="bands: expected 2 distinct band numbers in 0..1"):
                 r.draw(two, np.zeros((1, 2)), bands=bands)
