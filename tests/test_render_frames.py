@@ -308,6 +308,32 @@ def test_raster_draw_people_reads_only_its_rectangles():
     assert np.array_equal(out, expected)
 
 
+def test_raster_draw_people_on_a_later_page_starts_from_the_room(monkeypatch):
+    """With one band per page, each camera's rectangles get the room's colour and depth
+    back before the people are drawn, on every page: a person drawn in one call is gone
+    in the next call that hides them."""
+    from render.raster import Rasteriser
+
+    monkeypatch.setattr(Rasteriser, "max_page_height", S)
+    person = _quad(0.25, 0.25, 0.25, 0.0, (1.0, 0.0, 0.0), 0)      # pixels 32..47 both ways
+    r = _raster([_quad(0.0, 0.0, 1.0, 0.5, ROOM, -1), person], 1, n_tiles=2)
+    two, rects = np.repeat(EYE, 2, axis=0), [[(24, 28, 44, 52)], [(24, 28, 44, 52)]]
+    try:
+        assert [(p.first, p.tiles) for p in r.pages] == [(0, 1), (1, 1)]
+        r.draw(two, np.full((1, 2), np.nan))
+        r.store_room()
+        shown, hidden = np.zeros_like(r.pixels), np.zeros_like(r.pixels)
+        r.draw_people(two, np.zeros((1, 2)), [0, 1], rects, shown)
+        r.draw_people(two, np.full((1, 2), np.nan), [0, 1], rects, hidden)
+    finally:
+        r.close()
+    expected = np.zeros_like(shown)
+    expected[:, 28:52, 24:44] = [51, 102, 153, 0]
+    assert np.array_equal(hidden, expected)
+    expected[:, 32:48, 32:44] = [255, 0, 0, 1]
+    assert np.array_equal(shown, expected)
+
+
 def test_raster_checks_its_arguments():
     from render.raster import Rasteriser
 
