@@ -205,9 +205,7 @@ class Rasteriser:
         n = len(view_projs)
         if not 1 <= n <= self.n_tiles:
             raise ValueError(f"view_projs: expected 1..{self.n_tiles} cameras, got {n}")
-        bands = np.arange(n) if bands is None else np.asarray(bands, int).reshape(-1)
-        if len(bands) != n or len(set(bands.tolist())) != n or bands.min() < 0 or bands.max() >= self.n_tiles:
-            raise ValueError(f"bands: expected {n} distinct band numbers in 0..{self.n_tiles - 1}, got {bands}")
+        bands = self._check_bands(np.arange(n) if bands is None else bands, n)
         near = _flags(near, n)
         gl.context(self.backend)
         vp = np.ascontiguousarray(view_projs, np.float32)
@@ -221,6 +219,13 @@ class Rasteriser:
         if np.array_equal(bands, np.arange(b0, b0 + n)):
             return self.pixels[b0:b0 + n]
         return self.pixels[bands]
+
+    def _check_bands(self, bands, n: int) -> np.ndarray:
+        """``bands`` as (n,) ints, refused unless n distinct band numbers in ``0 .. n_tiles - 1``."""
+        bands = np.asarray(bands, int).reshape(-1)
+        if len(bands) != n or len(set(bands.tolist())) != n or (n and (bands.min() < 0 or bands.max() >= self.n_tiles)):
+            raise ValueError(f"bands: expected {n} distinct band numbers in 0..{self.n_tiles - 1}, got {bands}")
+        return bands
 
     def _draw_page(self, GL, page: Page, vp: np.ndarray, offsets_xy, local: np.ndarray, near: np.ndarray,
                    read: bool) -> None:
@@ -365,7 +370,8 @@ class Rasteriser:
 
         view_projs : (n, 4, 4) float, projection @ view per camera
         offsets_xy : (n_people, 2) float, metres (NaN rows: hidden)
-        bands : (n,) distinct ints, each camera's framebuffer band (as in :meth:`draw`)
+        bands : (n,) distinct ints in [0, n_tiles), each camera's framebuffer band (as in
+            :meth:`draw`; else ValueError, before anything is drawn)
         rects : n sequences of canvas rectangles (x0, y0, x1, y1), ints, end exclusive,
             rows top first, within the canvas (else ValueError); a camera without one is skipped (nothing
             drawn, nothing read)
@@ -387,6 +393,7 @@ class Rasteriser:
         if not len(view_projs) == len(bands) == len(rects):
             raise ValueError(f"view_projs, bands, rects: expected one per camera, got "
                              f"{len(view_projs)}, {len(bands)}, {len(rects)}")
+        bands = self._check_bands(bands, len(bands))
         if out.shape != self.pixels.shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
             raise ValueError(f"out: expected a C-contiguous uint8 array of shape {self.pixels.shape}")
         _check_rects(rects, self.width, self.height)

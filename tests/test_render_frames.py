@@ -367,11 +367,16 @@ def test_raster_checks_its_arguments():
             with pytest.raises(ValueError, match=r"out: expected a C-contiguous uint8 array of shape \(2, 64, 64, 4\)"):
                 r.draw_people(two, np.zeros((1, 2)), [0, 1], [[(0, 0, 4, 4)], []], out)
         out = np.zeros_like(r.pixels)
+        for bands in ([0, 0], [1, 2], [-1, 0]):          # as draw: a camera drawn or read elsewhere
+            with pytest.raises(ValueError, match="bands: expected 2 distinct band numbers in 0..1"):
+                r.draw_people(two, np.zeros((1, 2)), bands, [[(0, 0, 4, 4)], [(0, 0, 4, 4)]], out)
+            assert not out.any()
         for rect in ((-1, 0, 4, 4), (0, -1, 4, 4), (0, 0, S + 1, 4), (0, 0, 4, S + 1), (5, 0, 4, 4),
                      (0, 5, 4, 4)):
             with pytest.raises(ValueError, match=r"rects\[1\]: rectangle .* is not within the 64x64 canvas"):
                 r.draw_people(two, np.zeros((1, 2)), [0, 1], [[(0, 0, 4, 4)], [(0, 0, 2, 2), rect]], out)
             assert not out.any()                                   # refused before anything is read
+        r.draw_people(two[:0], np.zeros((1, 2)), [], [], out)                    # no camera: nothing to do
         r.draw_people(two, np.zeros((1, 2)), [0, 1], [[(0, 0, S, S)], [(7, 7, 7, 9)]], out)  # edges, empty: allowed
         assert out[0].any() and not out[1].any()
     finally:
