@@ -197,17 +197,24 @@ def test_raster_room_wins_a_depth_tie_with_a_person():
         r.close()
 
 
-def test_raster_near_cameras_draw_people_unclipped_and_their_soles():
+@pytest.mark.parametrize("per_page", [None, 1])         # one framebuffer, or one per camera
+def test_raster_near_cameras_draw_people_unclipped_and_their_soles(monkeypatch, per_page):
     """For a camera flagged ``near`` the people are depth-clamped (a person nearer than the
     near plane is drawn, in front of the room) and their last ``near_only`` vertices (the
     soles) are drawn; the room is clipped as for any camera; other cameras clip the
-    people and skip the soles. Flags alternate so that each change is applied."""
+    people and skip the soles. Flags alternate so that each change is applied; on pages
+    each camera keeps its own flag."""
+    from render.raster import Rasteriser
+
+    if per_page:
+        monkeypatch.setattr(Rasteriser, "max_page_height", per_page * S)
     back = _quad(0.0, 0.0, 1.0, 0.5, ROOM, -1)
     room_near = _quad(-0.5, 0.5, 0.5, -1.5, (0.0, 1.0, 0.0), -1)     # top left, nearer than near
     body = _quad(0.5, 0.5, 0.5, -1.5, (1.0, 0.0, 0.0), 0)             # top right, idem
     sole = _quad(0.0, -0.5, 0.5, 0.0, (0.0, 0.0, 1.0), 0)             # bottom, in range
     r = _raster([back, room_near, body, sole], 1, n_tiles=3, near_only=6)
     try:
+        assert len(r.pages) == (3 if per_page else 1)
         px = r.draw(np.repeat(EYE, 3, axis=0), np.zeros((1, 2)), bands=[0, 1, 2], near=[True, False, True]).copy()
     finally:
         r.close()
