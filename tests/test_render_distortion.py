@@ -6,7 +6,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from render.distortion import BLOCK, distort, distort_region, distortion_maps, regions_of
+from render.distortion import (
+    BLOCK,
+    distort,
+    distort_region,
+    distortion_maps,
+    ideal_pixels,
+    regions_of,
+)
 
 #: An 80 x 60 image, 67 degrees across, principal point at the centre.
 K_SMALL = np.array([[60.0, 0.0, 39.5], [0.0, 60.0, 29.5], [0.0, 0.0, 1.0]])
@@ -41,6 +48,21 @@ def test_a_lens_without_distortion_is_the_identity():
     part = np.zeros((20, 30), np.uint8)
     distort_region(labels, maps, (10, 30, 20, 50), part, nearest=True)
     assert np.array_equal(part, labels[10:30, 20:50])
+
+
+@pytest.mark.parametrize("dist,message", [
+    (np.zeros(4), r"^dist: expected shape \(5,\), got \(4,\)$"),       # no lens, but not the model's 5 numbers
+    (BARREL[:4], r"^dist: expected shape \(5,\), got \(4,\)$"),
+    ([np.nan, 0.0, 0.0, 0.0, 0.0], r"^dist: expected finite numbers"),
+    (["-0.25", 0.0, 0.0, 0.0, 0.0], r"^dist: expected numbers of shape \(5,\), got '-0\.25'$"),
+])
+def test_a_malformed_lens_is_refused_by_name(dist, message):
+    with pytest.raises(ValueError, match=message):
+        distortion_maps(K_SMALL, dist, 80, 60)
+    with pytest.raises(ValueError, match=message):
+        ideal_pixels(K_SMALL, dist, 80, 60)
+    with pytest.raises(ValueError, match=r"^K: expected shape \(3, 3\), got \(2, 3\)$"):
+        ideal_pixels(K_SMALL[:2], BARREL, 80, 60)
 
 
 @pytest.mark.parametrize("dist", [BARREL, PINCUSHION])
