@@ -9,6 +9,7 @@ from scene.checks import (
     check_array,
     check_between,
     check_choice,
+    check_finite,
     check_int,
     check_mapping,
     check_positive,
@@ -136,3 +137,47 @@ def test_the_first_unknown_or_missing_key_is_named():
         check_mapping("room", {"colour": 1, "shape": "circle", "floor": 2}, ("shape", "radius"))
     with pytest.raises(ValueError, match=r"^room: missing key 'shape'$"):
         check_mapping("room", {}, ("shape", "radius", "height"), ("shape", "radius", "height"))
+
+
+def test_finite_numbers_refuse_infinities_nan_and_what_is_not_a_number():
+    assert check_finite("yaw", -45) == -45.0 and check_finite("yaw", np.float32(0.5)) == 0.5
+    for value, shown_as in [(float("inf"), "inf"), (float("-inf"), "-inf"), (float("nan"), "nan"),
+                            (-(10**400), "-1e+400")]:
+        with pytest.raises(ValueError, match=f"^yaw: expected a finite number, got {re.escape(shown_as)}$"):
+            check_finite("yaw", value)
+    # None fails float() with a TypeError, a 0-d array of text with a ValueError; bytes would convert
+    for value, shown_as in [(None, "None"), (np.array("abc"), "array('abc', dtype='<U3')"), (b"5", "b'5'"),
+                            (True, "True"), ("5", "'5'")]:
+        with pytest.raises(ValueError, match=f"^yaw: expected a number, got {re.escape(shown_as)}$"):
+            check_finite("yaw", value)
+
+
+def test_an_integer_is_returned_as_a_python_int_and_a_minimum_of_zero_is_still_a_minimum():
+    n = check_int("n", np.int64(3))
+    assert type(n) is int and n == 3
+    assert check_int("n", 0, minimum=0) == 0
+    with pytest.raises(ValueError, match=r"^n: expected an integer >= 0, got -1$"):
+        check_int("n", -1, minimum=0)
+    with pytest.raises(ValueError, match=r"^n: expected an integer, got 3.0$"):
+        check_int("n", 3.0)
+
+
+def test_bytes_in_an_array_are_not_numbers():
+    # numpy would read b"5" as 5.0 without a word
+    with pytest.raises(ValueError, match=r"^xy: expected numbers of shape \(2,\), got b'5'$"):
+        check_array("xy", [b"5", 4.0], (2,))
+
+
+def test_any_mapping_is_a_mapping_and_the_allowed_keys_may_come_from_a_generator():
+    from types import MappingProxyType
+
+    proxy = MappingProxyType({"shape": "circle"})
+    assert check_mapping("room", proxy, ("shape", "radius")) is proxy
+    with pytest.raises(ValueError, match=r"^room: unknown key 'colour'; expected keys among shape, radius$"):
+        check_mapping("room", {"shape": "circle", "colour": 1}, (k for k in ("shape", "radius")))
+
+
+def test_a_range_refuses_what_lies_above_its_high_end():
+    assert check_between("noise", 255, 0.0, 255.0, "grey levels") == 255.0
+    with pytest.raises(ValueError, match=r"^noise: expected a finite number >= 0 and at most 255 grey levels, got 255.5$"):
+        check_between("noise", 255.5, 0.0, 255.0, "grey levels")
