@@ -1,6 +1,7 @@
 """The room: its floor polygon, what lies inside it, and its validation."""
 
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -43,3 +44,52 @@ def test_a_room_is_frozen_and_its_vertices_checked():
         Room(np.zeros((4, 3)), 2.5)
     with pytest.raises(ValueError, match="room.vertices: expected finite numbers"):
         Room(np.array([[0.0, 0.0], [1.0, np.nan], [0.0, 1.0]]), 2.5)
+
+
+def test_a_foot_is_twelve_inches_of_two_and_a_half_centimetres():
+    from scene import FOOT
+
+    assert FOOT == pytest.approx(12 * 2.54 / 100, rel=1e-15)
+    assert (22 * FOOT, 19 * FOOT) == (pytest.approx(6.7056), pytest.approx(5.7912))     # the lab, docs/conventions.md
+
+
+def test_a_rectangle_is_counter_clockwise_from_the_origin_with_x_along_its_width():
+    room = Room.rectangle(4.0, 3.0, 2.5)
+    np.testing.assert_array_equal(room.vertices, [[0, 0], [4, 0], [4, 3], [0, 3]])
+    assert room.kind == "rectangle" and room.area == 12.0
+    x, y = room.vertices.T
+    assert 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) == 12.0      # shoelace: positive, counter-clockwise
+
+
+def test_a_room_from_its_vertices_is_not_a_circle_and_a_circle_room_is_read_only():
+    assert Room(np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]]), 2.5).kind == "rectangle"
+    circle = Room.circle(1.0, n_vertices=8)
+    assert circle.kind == "circle" and circle.vertices.shape == (8, 2)
+    with pytest.raises(ValueError, match="read-only"):
+        circle.vertices[0, 0] = 2.0
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: Room.rectangle(0.0, 3.0, 2.5), "room.width: expected a finite number > 0, got 0.0"),
+    (lambda: Room.rectangle(4.0, -3.0, 2.5), "room.depth: expected a finite number > 0, got -3.0"),
+    (lambda: Room.rectangle(4.0, 3.0, float("nan")), "room.height: expected a finite number > 0, got nan"),
+    (lambda: Room.circle(-1.0), "room.radius: expected a finite number > 0, got -1.0"),
+    (lambda: Room.circle(1.0, 0), "room.height: expected a finite number > 0, got 0"),
+])
+def test_a_room_of_no_size_is_refused_by_name(make, message):
+    with pytest.raises(ValueError, match=f"^{re.escape(message)}$"):
+        make()
+
+
+def test_a_point_on_the_wall_is_in_the_room_and_one_a_millimetre_beyond_is_not():
+    room = Room.rectangle(4.0, 3.0, 2.5)
+    for xy in ([0.0, 1.5], [4.0, 3.0], [2.0, 0.0], [2.0, 1.5]):
+        assert room.contains_point(xy)
+    for xy in ([-0.001, 1.5], [4.001, 3.0], [2.0, 3.001], [2.0, -0.001]):
+        assert not room.contains_point(xy)
+
+
+def test_a_room_is_hashable_compares_by_identity_and_builds_its_polygon_once():
+    a, b = Room.rectangle(4.0, 3.0, 2.5), Room.rectangle(4.0, 3.0, 2.5)
+    assert len({a, b}) == 2 and a != b             # equal arrays would make == ambiguous
+    assert a.polygon is a.polygon
