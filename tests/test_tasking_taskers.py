@@ -200,7 +200,7 @@ def test_clustering_turns_with_the_room_when_every_axis_is_a_cluster(est, turns,
     np.testing.assert_allclose(axis(yaw[got2]), axis(yaw[got] + alpha), atol=1e-8)
 
 
-@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("seed", range(6))                 # seeds 3-5: k-means' one centre is off camera 0's axis
 def test_clustering_of_one_camera_is_uniform(seed):
     """k = 1: every pair axis comes with its perpendicular, so the doubled-angle points sum
     to zero and a single k-means centre's angle was rounding noise (reversing the estimates
@@ -970,3 +970,70 @@ def test_incremental_tasker_swaps_its_m_and_hands_out_copies():
     one = choose_cameras("incremental", 4, xy, yaw, np.pi, moved, R, ROOM, current=kept, m=1)
     assert two.tolist() != one.tolist()
     assert tasker.step(1, xy, yaw, np.pi, moved, R, ROOM).tolist() == two.tolist()
+
+
+def test_uniform_rounds_halves_up():
+    """floor(i * 6 / 4 + 1/2) for i = 0..3: 0, 1.5 -> 2, 3, 4.5 -> 5 (halves up, not to even)."""
+    from tasking.taskers import uniform_select
+
+    assert uniform_select(6, 4).tolist() == [0, 2, 3, 5]
+    assert uniform_select(3, 2).tolist() == [0, 2]
+
+
+def test_lazy_greedy_re_evaluates_a_stale_bound_within_tol_before_taking_the_lower_index():
+    """Rectangles in a 10 x 10 room (exact areas). Camera 0 removes 40 and goes first; camera 1
+    (gain 20, stale) is within tol of camera 2 (20 + 2**-24, still 20 after camera 0) but overlaps
+    camera 0, so its real gain is 10: greedy takes 2, and lazy greedy must not take the lower
+    index on a stale bound."""
+    room = box(0, 0, 10, 10)
+    w = np.array([box(0, 0, 4, 10), box(3, 0, 5, 10),
+                  box(6, 0, 8, 10).union(box(8, 0, 8 + 2.0**-20, 2.0**-4))], dtype=object)
+    assert shapely.area(w).tolist() == [40.0, 20.0, 20.0 + 2.0**-24]
+    for select in (greedy_select, lazy_greedy_select):
+        chosen, hull = select(w, room, 2)
+        assert chosen == [0, 2], select.__name__
+        assert hull.area == pytest.approx(100 - 40 - (20 + 2.0**-24), abs=1e-12)
+
+
+def test_greedy_remove_drops_the_line_where_two_hulls_touch():
+    """Camera 0 leaves the left half, camera 2 the right half, camera 1 proves nothing: without
+    camera 1 the hull is the line x = 2 where the halves touch, of area 0, so camera 1 goes and
+    the hull of cameras 0 and 2 is empty, not that line."""
+    from tasking.taskers import greedy_remove, greedy_remove_reference
+
+    room = box(0, 0, 4, 4)
+    w = np.array([box(2, 0, 4, 4), shapely.Polygon(), box(0, 0, 2, 4)], dtype=object)
+    assert room.difference(w[0]).intersection(room.difference(w[2])).length == 4.0
+    for remove in (greedy_remove, greedy_remove_reference):
+        kept, removed, hull = remove(w, room, [0, 1, 2], 1)
+        assert (kept, removed) == ([0, 2], [1]), remove.__name__
+        assert hull.is_empty, remove.__name__
+
+
+def test_clustering_without_a_generator_seeds_k_means_with_0():
+    """rng=None is seed 0 (docs); these estimates end in other cameras with seed 1."""
+    from tasking.clustering import clustering_select
+
+    xy, yaw = ring_cameras(16)
+    est = np.random.default_rng(2).uniform(-0.8, 0.8, (6, 2))
+    got = choose_cameras("clustering", 3, xy, yaw, np.pi, est, R, ROOM)
+    assert got.tolist() == clustering_select(yaw, est, 3, 0, camera_xy=xy).tolist()
+    assert got.tolist() != clustering_select(yaw, est, 3, 1, camera_xy=xy).tolist()
+
+
+def test_incremental_tasker_refuses_k_0():
+    with pytest.raises(ValueError, match="k must be >= 1"):
+        IncrementalTasker(0)
+
+
+def test_convex_room_takes_the_overlay_free_incremental_path(monkeypatch):
+    """In the circle the incremental step never builds polygons: the polygon path would fail."""
+    from tasking import taskers
+
+    def no_overlays(*args, **kwargs):
+        raise AssertionError("polygon path taken in a convex room")
+
+    monkeypatch.setattr(taskers, "incremental_select", no_overlays)
+    xy, yaw, c = drop(9, n=12, m=4)
+    got = choose_cameras("incremental", 4, xy, yaw, np.pi, c, R, ROOM, current=[0, 3, 6, 9], m=1)
+    assert got.size == 4 and len(set(got.tolist()) & {0, 3, 6, 9}) >= 3
