@@ -97,6 +97,7 @@ def test_fov_scalar_is_broadcast_and_may_exceed_pi():
         ([-0.5, 2.0], "fov must be in (0, 2*pi) radians; got -0.5..2"),
         ([1.5, 2 * np.pi], "fov must be in (0, 2*pi) radians; got 1.5..6.28319"),
         ([7.0, 3.0], "fov must be in (0, 2*pi) radians; got 3..7"),
+        ([[1.0, 1.0]], "fov must be a scalar or have shape (2,); got shape (1, 2)"),   # two values, not a row
     ],
 )
 def test_fov_errors(fov, message):
@@ -122,6 +123,8 @@ def test_radii_must_be_finite_and_positive(bad):
 def test_radii_of_another_shape_are_refused():
     with raises("radii must be a scalar or have shape (2,); got shape (3,)"):
         check_radii("radii", [0.1, 0.1, 0.1], 2)
+    with raises("radii must be a scalar or have shape (2,); got shape (2, 1)"):
+        check_radii("radii", [[0.1], [0.1]], 2)
 
 
 def test_camera_radii_may_be_zero_or_infinite():
@@ -138,6 +141,8 @@ def test_camera_radii_must_be_non_negative_numbers(bad):
 def test_camera_radii_of_another_shape_are_refused():
     with raises("near must be a scalar or have shape (2,); got shape (1,)"):
         check_camera_radii("near", [0.1], 2)
+    with raises("near must be a scalar or have shape (2,); got shape (1, 2)"):
+        check_camera_radii("near", [[0.1, 0.2]], 2)
 
 
 # --- check_room -----------------------------------------------------------------------
@@ -158,6 +163,15 @@ def test_room_is_returned_as_given():
 def test_room_must_be_a_valid_polygon_of_positive_area(room):
     with raises("room must be a valid Polygon with positive area"):
         check_room(room)
+
+
+def test_room_of_a_valid_ring_whose_area_underflows_to_0_is_refused():
+    """Legs of 2e-162 m: GEOS finds the ring valid, but its area e**2 / 2 is below the smallest
+    float, so the room's area is 0."""
+    tiny = Polygon([(0, 0), (2e-162, 0), (0, 2e-162)])
+    assert tiny.is_valid and not tiny.is_empty and tiny.area == 0.0
+    with raises("room must be a valid Polygon with positive area"):
+        check_room(tiny)
 
 
 def test_room_must_be_a_polygon():
@@ -244,6 +258,14 @@ def test_disjoint_discs_may_touch_up_to_rounding():
 def test_overlapping_discs_are_named(centres, message):
     with raises(message):
         check_discs_disjoint(np.array(centres), np.full(len(centres), 0.1))
+
+
+def test_discs_of_different_radii_overlap_by_the_sum_of_their_own_radii():
+    """Radii 0.1 and 0.3: centres 0.5 m apart are clear (0.5 > 0.4), 0.35 m apart overlap."""
+    check_discs_disjoint(np.array([[0.0, 0.0], [0.5, 0.0]]), np.array([0.1, 0.3]))
+    check_discs_disjoint(np.array([[0.5, 0.0], [0.0, 0.0]]), np.array([0.3, 0.1]))
+    with raises("centers: objects 0 and 1 overlap (distance 0.35 m)"):
+        check_discs_disjoint(np.array([[0.0, 0.0], [0.35, 0.0]]), np.array([0.1, 0.3]))
 
 
 def test_discs_overlapping_by_a_nanometre_are_refused():
