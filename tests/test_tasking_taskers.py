@@ -1037,3 +1037,20 @@ def test_convex_room_takes_the_overlay_free_incremental_path(monkeypatch):
     xy, yaw, c = drop(9, n=12, m=4)
     got = choose_cameras("incremental", 4, xy, yaw, np.pi, c, R, ROOM, current=[0, 3, 6, 9], m=1)
     assert got.size == 4 and len(set(got.tolist()) & {0, 3, 6, 9}) >= 3
+
+
+def test_greedy_hull_holds_no_slivers_along_the_walls():
+    """180-degree cameras on the walls of a square: their wedge edges run along the walls, and
+    the plain differences leave parts of zero area (rounding noise) that the hull must drop."""
+    room, xy, yaw = _wall_rig()
+    c = np.array([[0.2, 0.3], [-0.4, -0.1], [0.5, -0.5]])
+    w = free_wedges_from_discs(xy, yaw, np.pi, c, R, room)
+    for select in (greedy_select, lazy_greedy_select):
+        for k in (1, 2):
+            chosen, hull = select(w, room, k)
+            raw = room
+            for j in chosen:
+                raw = raw.difference(w[j])
+            assert shapely.area(shapely.get_parts(raw)).min() <= 1e-12 * room.area   # slivers were there
+            assert shapely.area(shapely.get_parts(hull)).min() > 1e-12 * room.area, (select.__name__, k)
+            assert hull.area == pytest.approx(raw.area, rel=0, abs=1e-12)
