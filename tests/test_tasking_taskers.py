@@ -1054,3 +1054,24 @@ def test_greedy_hull_holds_no_slivers_along_the_walls():
             assert shapely.area(shapely.get_parts(raw)).min() <= 1e-12 * room.area   # slivers were there
             assert shapely.area(shapely.get_parts(hull)).min() > 1e-12 * room.area, (select.__name__, k)
             assert hull.area == pytest.approx(raw.area, rel=0, abs=1e-12)
+
+
+def test_incremental_convex_with_free_cones_wider_than_pi():
+    """270-degree cameras inside the room: a camera's free interval can span more than pi, a
+    cone that is not convex; the overlay-free step splits it and still agrees with the polygon
+    reference."""
+    xy, yaw = ring_cameras(8)
+    xy, c = 0.5 * xy, np.array([[0.7, 0.0]])
+    _, (_, _, t0, t1) = free_wedges_from_discs(xy, yaw, 1.5 * np.pi, c, R, ROOM, strict=False,
+                                               return_cones=True)
+    assert np.any(t1 - t0 > np.pi)
+    for m in (1, 2):
+        _check_convex_step(xy, yaw, 1.5 * np.pi, c, ROOM, [0, 3, 5], m)
+
+
+def test_naive_greedy_ties_go_to_the_lowest_index_never_a_chosen_camera():
+    """No objects and 180-degree cameras on a ring: each empties the room alone, so every
+    later hull is empty and the ties go to the lowest cameras not chosen yet."""
+    xy, yaw = ring_cameras(4)
+    w = free_wedges_from_discs(xy, yaw, np.pi, np.zeros((0, 2)), R, ROOM)
+    assert naive_greedy_select(w, ROOM, 3) == [0, 1, 2]
