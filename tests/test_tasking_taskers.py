@@ -1075,3 +1075,18 @@ def test_naive_greedy_ties_go_to_the_lowest_index_never_a_chosen_camera():
     xy, yaw = ring_cameras(4)
     w = free_wedges_from_discs(xy, yaw, np.pi, np.zeros((0, 2)), R, ROOM)
     assert naive_greedy_select(w, ROOM, 3) == [0, 1, 2]
+
+
+def test_greedy_remove_ties_within_tol_go_to_the_lowest_index():
+    """Rectangles in a 4 x 4 room (exact areas): camera 0 proves 4 + 2**-30 m^2 empty, camera 1
+    4 m^2. Without camera 1 the hull is 2**-30 smaller, far within 1e-9 of the room's area:
+    a tie, so camera 0, the lower index, goes."""
+    from tasking.taskers import greedy_remove, greedy_remove_reference
+
+    room = box(0, 0, 4, 4)
+    w = np.array([box(0, 0, 1, 4).union(box(1, 0, 1 + 2.0**-28, 2.0**-2)), box(3, 0, 4, 4)], dtype=object)
+    assert shapely.area(w).tolist() == [4 + 2.0**-30, 4.0]
+    for remove in (greedy_remove, greedy_remove_reference):
+        kept, removed, hull = remove(w, room, [0, 1], 1)
+        assert (kept, removed) == ([1], [0]), remove.__name__
+        assert hull.area == 12.0
