@@ -1090,3 +1090,14 @@ def test_greedy_remove_ties_within_tol_go_to_the_lowest_index():
         kept, removed, hull = remove(w, room, [0, 1], 1)
         assert (kept, removed) == ([1], [0]), remove.__name__
         assert hull.area == 12.0
+
+
+def test_incremental_convex_removal_ties_go_to_the_lowest_index_whatever_the_rounding():
+    """Objects on the x axis and cameras 1 and 7 mirror images across it: dropping either leaves
+    the same hull area, up to rounding (here the rounding favours dropping 7), so camera 1, the
+    lower index, goes, as in the polygon reference."""
+    xy, yaw = ring_cameras(8)
+    c = np.array([[0.4, 0.0], [-0.3, 0.0]])
+    _check_convex_step(xy, yaw, np.pi, c, ROOM, [1, 7], 1)
+    got = choose_cameras("incremental", 2, xy, yaw, np.pi, c, R, ROOM, current=[1, 7], m=1)
+    assert 7 in got.tolist()
