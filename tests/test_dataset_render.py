@@ -672,6 +672,83 @@ def test_files_under_lists_and_sorts_like_rglob(tmp_path):
     assert want.index("a/c/e/f") < want.index("a/c-d") < want.index("a-b/x")   # by component, not by string
 
 
+def test_files_under_does_not_follow_a_link_to_a_folder_and_sorts_the_others(tmp_path):
+    """A link to a folder is not walked into: it is one of the other entries, which come
+    sorted by path components like the files."""
+    from testbed.episodes import files_under
+
+    for rel in ("a/c/f", "a-b/g", "d/h"):
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(rel)
+    (tmp_path / "a-b" / "to_d").symlink_to(tmp_path / "d", target_is_directory=True)
+    (tmp_path / "a" / "c" / "gone").symlink_to(tmp_path / "nowhere")
+    (tmp_path / "a" / "x").symlink_to(tmp_path / "nowhere")
+    others = []
+    assert files_under(tmp_path, others) == ["a/c/f", "a-b/g", "d/h"]
+    assert others == ["a/c/gone", "a/x", "a-b/to_d"]                    # "a/..." before "a-b/...": by component
+
+
+def test_checksums_take_the_known_digests_and_read_the_rest(tmp_path):
+    from testbed.episodes import checksums
+
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "a.png").write_bytes(b"written")
+    (tmp_path / "b.csv").write_bytes(b"frame\n")
+    got = checksums(tmp_path, {"sub/a.png": "f" * 64})
+    assert got == {"b.csv": blake3.blake3(b"frame\n").hexdigest(), "sub/a.png": "f" * 64}
+    assert list(got) == ["b.csv", "sub/a.png"]
+    assert checksums(tmp_path, algorithm="sha256")["sub/a.png"] == hashlib.sha256(b"written").hexdigest()
+
+
+def test_episode_config_to_dict_is_the_manifests_config(tmp_path):
+    """docs/dataset.md: config holds scene, people, cameras, frames, seed, format and the pipeline
+    params; the cameras in number order, the params a copy."""
+    from testbed.episodes import EpisodeConfig
+
+    params = {"threshold": 0.3}
+    config = EpisodeConfig("lab", 2, (11, 2, 7), 3, 5, "video", params, scene_yaml="name: x\n")
+    d = config.to_dict()
+    assert d == {"scene": "lab", "people": 2, "cameras": [2, 7, 11], "frames": 3, "seed": 5, "format": "video",
+                 "params": {"threshold": 0.3}}
+    d["params"]["threshold"] = 0.5
+    assert config.params == {"threshold": 0.3}
+    assert EpisodeConfig("lab", None, None, 1, 0).to_dict()["cameras"] is None
+
+
+def test_save_npz_exact_is_a_compressed_npz_of_fixed_dates(tmp_path):
+    import zipfile
+
+    from testbed.episodes import save_npz_exact
+
+    zeros, ramp = np.zeros((64, 640), bool), np.arange(12.0).reshape(3, 4)
+    save_npz_exact(tmp_path / "a.npz", big=zeros, ramp=ramp)
+    with np.load(tmp_path / "a.npz") as z:
+        assert z.files == ["big", "ramp"]
+        np.testing.assert_array_equal(z["big"], zeros)
+        np.testing.assert_array_equal(z["ramp"], ramp)
+    with zipfile.ZipFile(tmp_path / "a.npz") as zf:
+        for info in zf.infolist():
+            assert info.date_time == (1980, 1, 1, 0, 0, 0)
+            assert info.compress_type == zipfile.ZIP_DEFLATED
+        assert zf.getinfo("big.npy").compress_size < zeros.size // 20          # 40960 bytes of zeros, deflated
+
+
+@pytest.mark.parametrize(("people", "dtype"), [(0, np.uint8), (8, np.uint8), (9, np.uint16), (16, np.uint16)])
+def test_silhouette_dtype_holds_one_bit_per_person(people, dtype):
+    from testbed.episodes import silhouette_dtype
+
+    assert silhouette_dtype(people) is dtype
+    assert np.iinfo(dtype).bits >= people
+
+
+def test_silhouette_dtype_refuses_more_than_sixteen_people():
+    from testbed.episodes import silhouette_dtype
+
+    with pytest.raises(ValueError, match=r"^--count: silhouettes store one bit per person in a 16-bit PNG; "
+                                         r"expected at most 16, got 17$"):
+        silhouette_dtype(17, "--count")
+
+
 def test_resume_keeps_the_earlier_runs_record_and_warns_of_other_versions(dataset, tmp_path, capsys):
     import numpy
 
