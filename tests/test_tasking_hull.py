@@ -185,6 +185,18 @@ def test_dataset_hull_record_does_not_depend_on_the_overlay_order():
     assert hull_record(0, Polygon())["polygons"] == []
 
 
+def test_dataset_hull_record_rounds_vertices_to_a_micrometre_and_area_to_1e9():
+    """gt_hull.json: vertices in metres to 1e-6 m, the area in m^2 to 1e-9 m^2, of the unrounded polygon."""
+    from testbed.episodes import hull_record
+
+    tri = Polygon([(0, 0), (1 / 3, 0), (0, 2 / 3)])                 # area 1/9
+    rec = hull_record(7, tri)
+    assert rec["frame"] == 7 and rec["area"] == 0.111111111
+    (poly,) = rec["polygons"]
+    assert poly["holes"] == []
+    assert sorted(map(tuple, poly["exterior"])) == [(0.0, 0.0), (0.0, 0.0), (0.0, 0.666667), (0.333333, 0.0)]
+
+
 @settings(max_examples=30, deadline=None)
 @given(scenes, st.integers(0, 9))
 def test_adding_a_camera_never_grows_the_hull(scene, extra):
