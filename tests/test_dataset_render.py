@@ -162,6 +162,85 @@ def test_silhouettes_exact_with_sixteen_bit_masks():
     assert sil.any()
 
 
+class BoxRig:
+    """What :func:`testbed.episodes.silhouettes` asks of a renderer, made by hand: one camera
+    above the floor's origin, each person's canvas box and what rendering them alone gives
+    (a boolean image); ``rendered`` records who was rendered alone."""
+
+    def __init__(self, boxes, alone, radius=0.1):
+        from types import SimpleNamespace
+
+        self.numbers = [1]
+        self.cameras = [SimpleNamespace(center_world=np.array([0.0, 0.0, 2.2]))]
+        self.scene = SimpleNamespace(people=SimpleNamespace(radius=radius))
+        self.boxes, self.alone, self.rendered = np.asarray(boxes, float), alone, []
+
+    def _rects(self, idx, pos):
+        return self.boxes[None].copy()
+
+    def labels(self, pos, cameras):
+        (i,) = np.flatnonzero(np.isfinite(pos).all(axis=1))
+        self.rendered.append(i)
+        return (self.alone[i] * (i + 1)).astype(np.uint8)[None]
+
+
+def _two_side_by_side(gap, front_label):
+    """Person 0 at 1 m from the camera, person 1 behind them ``gap`` metres further (disc to
+    disc); alone, person 0 covers columns 0-5 and person 1 columns 5-11, so their boxes share
+    column 5, which the frame's labels give to ``front_label``."""
+    alone = np.zeros((2, 4, 12), bool)
+    alone[0, :, :6] = alone[1, :, 5:] = True
+    labels = np.where(alone[0], 1, 0) + np.where(alone[1] & ~alone[0], 2, 0)
+    labels[:, 5] = front_label
+    rig = BoxRig([[0, 0, 5, 3], [5, 0, 11, 3]], alone)
+    pos = np.array([[1.0, 0.0], [1.0 + 0.2 + gap, 0.0]])
+    return rig, pos, labels.astype(np.uint8)[None], alone
+
+
+def _bits(sil, i):
+    return (sil[0] >> i) & 1 == 1
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.01, 0.0199, -0.05])
+def test_silhouettes_rerender_people_closer_than_apart(gap):
+    """Within 2 radius + APART the frame's labels may give the farther person a pixel of
+    the nearer one (depths too close to resolve): both are rendered alone, even where their
+    boxes only share one column."""
+    from testbed.episodes import silhouettes
+
+    rig, pos, labels, alone = _two_side_by_side(gap, front_label=2)
+    sil = silhouettes(rig, pos, labels)
+    assert sil.dtype == np.uint8
+    for i in range(2):
+        np.testing.assert_array_equal(_bits(sil, i), alone[i])
+    assert sorted(rig.rendered) == [0, 1]
+
+
+def test_silhouettes_take_the_nearer_persons_labels_beyond_apart():
+    """2 radius + APART apart the nearer person's labels are exact: only the one behind is rendered alone."""
+    from testbed.episodes import silhouettes
+
+    rig, pos, labels, alone = _two_side_by_side(0.0201, front_label=1)
+    sil = silhouettes(rig, pos, labels)
+    for i in range(2):
+        np.testing.assert_array_equal(_bits(sil, i), alone[i])
+    assert rig.rendered == [1]
+
+
+def test_silhouettes_render_nobody_alone_whose_boxes_meet_no_one():
+    """Boxes in the same columns but rows apart: each person's labels are their silhouette."""
+    from testbed.episodes import silhouettes
+
+    alone = np.zeros((2, 8, 12), bool)
+    alone[0, :3, 2:9] = alone[1, 5:, 4:11] = True
+    labels = (alone[0] * 1 + alone[1] * 2).astype(np.uint8)[None]
+    rig = BoxRig([[2, 0, 8, 2], [4, 5, 10, 7]], alone)
+    sil = silhouettes(rig, np.array([[2.0, 0.0], [1.0, 0.0]]), labels)   # person 1 the nearer
+    for i in range(2):
+        np.testing.assert_array_equal(_bits(sil, i), alone[i])
+    assert rig.rendered == []
+
+
 @settings(max_examples=40, deadline=None)
 @given(st.integers(1, 12), st.integers(1, 37), st.booleans(), st.floats(0.0, 1.0), st.integers(0, 2**32 - 1))
 def test_or_lookup_equals_a_look_up_table_and_a_masked_or(h, w, wide, fill, seed):
@@ -243,6 +322,82 @@ def test_overlapped_writing_gives_the_same_files(tmp_path):
     b = render_episode(config, 0, str(tmp_path / "b"), counts[False].append, overlap=False)
     assert a == b
     assert counts[True] == counts[False] == [1, 1, 1]            # every frame counted once
+
+
+def test_closing_the_videos_closes_each_and_raises_the_first_failure():
+    """Every writer is closed even when one fails; the first failure is raised, none while
+    another exception is under way (it would hide the one that stopped the episode)."""
+    from testbed.episodes import _Frames
+
+    closed = []
+
+    class Writer:
+        def __init__(self, name, error=None):
+            self.name, self.error = name, error
+
+        def close(self):
+            closed.append(self.name)
+            if self.error:
+                raise OSError(self.error)
+
+    frames = object.__new__(_Frames)
+    frames.videos = [Writer("cam01"), Writer("cam02", "No space left on device"), Writer("cam03", "second")]
+    with pytest.raises(OSError, match="^No space left on device$"):
+        frames.close_videos()
+    assert closed == ["cam01", "cam02", "cam03"]
+    closed.clear()
+    with pytest.raises(KeyError):
+        try:
+            raise KeyError("render failed")
+        finally:
+            frames.close_videos()
+    assert closed == ["cam01", "cam02", "cam03"]
+
+
+def test_each_parameter_set_gets_its_own_pipeline_on_one_rig():
+    """A process keeps a pipeline per rig and parameter set: an episode of other params is not
+    processed by the pipeline of the last ones."""
+    from pipeline import PipelineParams
+    from testbed import episodes
+
+    made = {}
+    for threshold in (55.0, 40.0, 55.0):
+        config = episodes.with_scene_text(episodes.EpisodeConfig("lab", 1, (2,), 1, 0,
+                                                                 params={"column_threshold": threshold}))
+        scene = episodes.load_episode_scene(config)
+        params = PipelineParams.from_mapping(config.params)
+        pipe = episodes._episode_pipeline(config, scene, episodes._renderer(config, scene), params)
+        assert pipe.params.column_threshold == threshold
+        made.setdefault(threshold, pipe)
+        assert made[threshold] is pipe                      # the same parameters: the pipeline kept
+
+
+def test_an_episode_of_every_camera_names_them_in_the_scene_files_order(tmp_path, lab):
+    """Cameras left out: meta.json, scanlines.npz and gt_hull.json name all 16, in the lab file's order."""
+    from testbed.episodes import EpisodeConfig, render_episode
+
+    render_episode(EpisodeConfig("lab", 1, None, 1, 0), 0, str(tmp_path))
+    ep = tmp_path / "episode_0000"
+    numbers = [c.number for c in lab.cameras]
+    assert numbers == list(range(1, 17))
+    assert json.loads((ep / "meta.json").read_text())["cameras"] == numbers
+    assert json.loads((ep / "gt_hull.json").read_text())["cameras"] == numbers
+    with np.load(ep / "scanlines.npz") as z:
+        assert z["camera_numbers"].tolist() == numbers
+
+
+def test_an_episode_rendered_again_replaces_its_folder(tmp_path):
+    """A retried task whose first run got as far as the rename: the second run's folder replaces it."""
+    from testbed.episodes import EpisodeConfig, render_episode
+
+    config = EpisodeConfig("lab", 1, (2,), 1, 3)
+    first = render_episode(config, 0, str(tmp_path))
+    (tmp_path / "episode_0000" / "stale.txt").write_text("left by the first run")
+    again = render_episode(config, 0, str(tmp_path))
+    assert again == first
+    assert sorted(p.relative_to(tmp_path / "episode_0000").as_posix()
+                  for p in (tmp_path / "episode_0000").rglob("*") if p.is_file()) == sorted(first["files"])
+    assert [p.name for p in tmp_path.iterdir()] == ["episode_0000"]
 
 
 def test_stage_seconds_add_up_over_episodes(tmp_path):
@@ -502,6 +657,60 @@ def test_too_little_disk_for_the_run_warns_and_renders(tmp_path, capsys, monkeyp
     err = capsys.readouterr().err
     assert "warning: --out: 1.66 MB free on" in err and "2 episodes need about 2.21 MB" in err
     assert len(json.loads((out / "manifest.json").read_text())["episodes"]) == 2
+
+
+def test_saved_radii_are_the_pipelines_and_the_truths_for_a_persons_width(dataset, lab):
+    """scanlines.npz: blind and sight radii of the pipeline's scanlines, and the (wider) ones
+    of the true scanlines, for a person 1.75 m high and 0.5 m across (the lab's people)."""
+    from pipeline import Pipeline, PipelineParams
+
+    with np.load(dataset / "episode_0000" / "scanlines.npz") as z:
+        radii = {k: z[k] for k in ("blind_radius", "sight_radius", "gt_blind_radius", "gt_sight_radius")}
+    cams = [c for c in lab.cameras if c.number in (2, 7, 11)]
+    pipe = Pipeline(cams, PipelineParams())
+    for truth, near, far in ((False, "blind_radius", "sight_radius"), (True, "gt_blind_radius", "gt_sight_radius")):
+        want = pipe.sight_range(1.75, truth=truth, object_width=0.5)
+        np.testing.assert_array_equal(radii[near], want[0])
+        np.testing.assert_array_equal(radii[far], want[1])
+    assert (radii["gt_blind_radius"] < radii["blind_radius"]).all()     # the truth needs one row, not several
+    assert (radii["gt_sight_radius"] > radii["sight_radius"]).all()
+
+
+def test_people_walk_on_the_first_stream_of_their_episodes_seed(dataset, lab):
+    """docs/dataset.md: episode e of seed S walks on default_rng(SeedSequence(S).spawn(E)[e]).spawn(2)[0]."""
+    from testbed.episode import walk
+
+    motion = np.random.default_rng(np.random.SeedSequence(4).spawn(2)[1]).spawn(2)[0]
+    track = walk(lab, 2, motion)
+    people = read_people(dataset / "episode_0001" / "people.csv")
+    for f in (0, 1):
+        rows = people[people["frame"] == f]
+        np.testing.assert_array_equal(np.column_stack([rows["x"], rows["y"]]), track[f])
+
+
+def test_meta_json_records_the_scene_as_rendered(dataset, lab):
+    """meta.json: the people and cameras rendered (the lab's 3 people when --people is left
+    out), the seed's spawn key, the frame step, the scene file's text and the silhouettes' PNG type."""
+    from scene.config import scene_path
+
+    meta = json.loads((dataset / "episode_0001" / "meta.json").read_text())
+    assert (meta["episode"], meta["seed"], meta["spawn_key"], meta["frames"]) == (1, 4, [1], 2)
+    assert (meta["people"], meta["cameras"], meta["scene"], meta["format"]) == (3, [2, 7, 11], "lab", "png")
+    assert meta["dt"] == lab.dt and meta["scene_yaml"] == scene_path("lab").read_text()
+    assert meta["silhouettes"] == "bit i = person i, uint8 PNG"
+
+
+def test_each_cameras_background_png_is_its_own_empty_room(dataset):
+    import cv2
+
+    from testbed.episodes import EpisodeConfig, _renderer, load_episode_scene
+
+    config = EpisodeConfig("lab", None, (2, 7, 11), 2, 4)
+    background = _renderer(config, load_episode_scene(config)).background().rgb
+    for k, n in enumerate((2, 7, 11)):
+        png = cv2.imread(str(dataset / "episode_0000" / "background" / f"cam{n:02d}.png"), cv2.IMREAD_COLOR)
+        np.testing.assert_array_equal(png[..., ::-1], background[k])
+    assert not np.array_equal(background[0], background[1])
 
 
 def test_saved_scanlines_come_from_the_saved_frames_and_masks(dataset):
