@@ -651,6 +651,29 @@ def test_a_scene_with_a_floor_camera_among_calibrated_ones_is_not_calibrated():
     assert small.is_calibrated and not mixed.is_calibrated
 
 
+@pytest.mark.parametrize("old, new, match", [
+    ("height: 2.5}", "}", r"^room: missing key 'height'$"),
+    ("  intrinsics: {resolution: [64, 48], hfov_deg: 60, distortion: [0, 0, 0, 0, 0]}\n", "",
+     r"^cameras: missing key 'intrinsics'$"),
+    ("hfov_deg: 60, ", "", r"^cameras.intrinsics: missing key 'hfov_deg'$"),
+    (", distortion: [0, 0, 0, 0, 0]", "", r"^cameras.intrinsics: missing key 'distortion'$"),
+    ("count: 2, radius: 0.25", "count: 2", r"^people: missing key 'radius'$"),
+    ("hfov_deg: 60", "hfov_deg: null", r"^cameras.intrinsics.hfov_deg: expected a field of view in \[1, 179\] degrees, got None$"),
+    ("hfov_deg: 60", "hfov_deg: [60]", r"^cameras.intrinsics.hfov_deg: expected a field of view .*, got \[60\]$"),
+    ("radius: 0.25}", "radius: 0.25, positions: []}", r"^people.positions: expected shape \(2, 2\), got \(0,\)$"),
+])
+def test_a_missing_key_or_a_value_of_another_kind_is_one_line(old, new, match):
+    with pytest.raises(ValueError, match=match):
+        Scene.from_text(_edited(SMALL, old, new))
+
+
+def test_a_circular_room_needs_its_radius_and_a_ring_a_field_of_view_that_is_a_number():
+    with pytest.raises(ValueError, match=r"^room: missing key 'radius'$"):
+        Scene.from_text(_edited(CIRCLE, "  radius: 1.0\n", ""))
+    with pytest.raises(ValueError, match=r"^cameras.ring.fov_deg: expected a field of view in \[1e-06, 180\] degrees, got None$"):
+        Scene.from_text(_edited(CIRCLE, "fov_deg: 180", "fov_deg: null"))
+
+
 # ---- the camera's checks and derived values at their edges, against hand-computed values
 GOOD_K = np.array([[500.0, 0.0, 319.5], [0.0, 500.0, 239.5], [0.0, 0.0, 1.0]])
 
