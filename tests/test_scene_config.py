@@ -674,6 +674,45 @@ def test_a_circular_room_needs_its_radius_and_a_ring_a_field_of_view_that_is_a_n
         Scene.from_text(_edited(CIRCLE, "fov_deg: 180", "fov_deg: null"))
 
 
+def test_the_people_count_refused_names_the_most_that_fit():
+    """12 m2 / (pi 0.3**2 m2) / 4 = 10.6 people of radius 0.3 m: 10 may be dropped, 11 may not."""
+    text = SMALL.replace("{count: 2, radius: 0.25}", "{count: 10, radius: 0.3}")
+    assert Scene.from_text(text).people.count == 10
+    with pytest.raises(ValueError, match=r"^people.count: 11 people of radius 0.3 m do not fit in the room; expected at most 10$"):
+        Scene.from_text(text.replace("count: 10,", "count: 11,"))
+
+
+@pytest.mark.parametrize("x", [0.2, 0.25])
+def test_a_person_given_closer_to_the_wall_than_their_radius_or_touching_it_is_refused(x):
+    text = SMALL.replace("radius: 0.25}", f"radius: 0.25, positions: [[1.0, 1.0], [{x}, 1.0]]}}")
+    with pytest.raises(ValueError, match=rf"^people.positions\[1\]: person at \[{x}, 1.0\] overlaps a wall or is outside the room$"):
+        Scene.from_text(text)
+
+
+def test_a_person_given_just_clear_of_the_wall_loads():
+    text = SMALL.replace("radius: 0.25}", "radius: 0.25, positions: [[1.0, 1.0], [0.26, 1.0]]}")
+    assert Scene.from_text(text).people.positions.tolist() == [[1.0, 1.0], [0.26, 1.0]]
+
+
+def test_of_people_overlapping_in_several_pairs_the_first_pair_is_named():
+    text = SMALL.replace("{count: 2, radius: 0.25}", "{count: 3, radius: 0.25, positions: [[1.0, 1.0], [1.2, 1.0], [1.1, 1.2]]}")
+    with pytest.raises(ValueError, match=r"^people.positions\[1\]: person overlaps person 0$"):
+        Scene.from_text(text)
+
+
+def test_the_people_given_positions_and_colours_are_read_only():
+    scene = Scene.from_text(SMALL.replace("radius: 0.25}", "radius: 0.25, positions: [[1.0, 1.0], [2.0, 1.0]]}"))
+    for array in (scene.people.positions, scene.people.colours):
+        with pytest.raises(ValueError, match="read-only"):
+            array[0, 0] = 0
+
+
+def test_the_colours_given_are_uint8_like_the_default_ones():
+    scene = Scene.from_text(SMALL.replace("radius: 0.25}", "radius: 0.25, colours: [[255, 0, 1], [2.0, 3, 4]]}"))
+    assert scene.people.colours.dtype == np.uint8 == Scene.from_text(SMALL).people.colours.dtype
+    assert scene.people.colours.tolist() == [[255, 0, 1], [2, 3, 4]]
+
+
 # ---- the camera's checks and derived values at their edges, against hand-computed values
 GOOD_K = np.array([[500.0, 0.0, 319.5], [0.0, 500.0, 239.5], [0.0, 0.0, 1.0]])
 
