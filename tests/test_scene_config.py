@@ -2,6 +2,7 @@
 
 import copy
 import dataclasses
+import re
 
 import cv2
 import numpy as np
@@ -674,6 +675,13 @@ def test_a_circular_room_needs_its_radius_and_a_ring_a_field_of_view_that_is_a_n
         Scene.from_text(_edited(CIRCLE, "fov_deg: 180", "fov_deg: null"))
 
 
+def test_a_ring_stands_on_the_wall_of_a_room_of_any_radius():
+    scene = Scene.from_text(_edited(CIRCLE, "radius: 1.0", "radius: 2.5").replace("count: 16,", "count: 4,"))
+    xy, yaw, _ = scene.floor_poses()
+    np.testing.assert_allclose(xy, [[2.5, 0.0], [0.0, 2.5], [-2.5, 0.0], [0.0, -2.5]], atol=1e-12)
+    np.testing.assert_allclose(np.exp(1j * yaw), [-1, -1j, 1, 1j], atol=1e-12)
+
+
 def test_the_people_count_refused_names_the_most_that_fit():
     """12 m2 / (pi 0.3**2 m2) / 4 = 10.6 people of radius 0.3 m: 10 may be dropped, 11 may not."""
     text = SMALL.replace("{count: 2, radius: 0.25}", "{count: 10, radius: 0.3}")
@@ -711,6 +719,24 @@ def test_the_colours_given_are_uint8_like_the_default_ones():
     scene = Scene.from_text(SMALL.replace("radius: 0.25}", "radius: 0.25, colours: [[255, 0, 1], [2.0, 3, 4]]}"))
     assert scene.people.colours.dtype == np.uint8 == Scene.from_text(SMALL).people.colours.dtype
     assert scene.people.colours.tolist() == [[255, 0, 1], [2, 3, 4]]
+
+
+def test_a_gain_jitter_of_100_percent_loads_and_past_it_is_refused():
+    assert Scene.from_text(SMALL + "render: {gain_jitter: 1.0}\n").render.gain_jitter == 1.0
+    with pytest.raises(ValueError, match=r"^render.gain_jitter: expected a finite number >= 0 and at most 1 \(relative\), got 1.001$"):
+        Scene.from_text(SMALL + "render: {gain_jitter: 1.001}\n")
+
+
+def test_a_scene_is_named_after_its_file_and_its_errors_name_the_file(tmp_path):
+    path = tmp_path / "hall.yaml"
+    path.write_text(SMALL)
+    assert Scene.from_yaml(path).name == "hall" and load_scene(path).name == "hall"
+    assert Scene.from_config(yaml.safe_load(SMALL), source="rooms/hall.yaml").name == "hall"
+    path.write_text("")
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))}: empty scene file"):
+        Scene.from_yaml(path)
+    with pytest.raises(ValueError, match=r"^rooms/hall.yaml: expected a mapping at the top level, got list$"):
+        Scene.from_config([1], source="rooms/hall.yaml")
 
 
 # ---- the camera's checks and derived values at their edges, against hand-computed values
