@@ -170,7 +170,12 @@ def test_run_bad_input_is_one_line(capsys, argv, match):
 
 def test_optimal_with_too_many_subsets_is_refused_before_the_first_frame():
     """C(24, 12) subsets failed after the first frame, naming an internal parameter."""
+    from tasking.taskers import MAX_SUBSETS
+
     assert LoopConfig("optimal", 8).check(16).k == 8                  # C(16, 8) = 12870
+    assert LoopConfig("optimal", 1).check(MAX_SUBSETS).k == 1         # C(n, 1) = n: the limit itself is allowed
+    with pytest.raises(ValueError, match=r"C\(200001, 1\) = 200001 subsets"):
+        LoopConfig("optimal", 1).check(MAX_SUBSETS + 1)
     with pytest.raises(ValueError, match=r"--tasker: optimal would compare C\(24, 12\) = 2704156 subsets of "
                                          r"cameras each frame, more than 200000; choose greedy or incremental"):
         LoopConfig("optimal", 12).check(24, as_options=True)
