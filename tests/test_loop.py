@@ -772,20 +772,21 @@ def test_a_precomputed_source_serves_the_cameras_asked_for_by_number():
 
 
 def test_a_live_source_renders_only_the_tasked_cameras_and_resets_a_node_switched_on(monkeypatch):
-    """Each tasked camera's frame goes to its own node; a node starts a fresh temporal filter
-    only when it is switched on, not while it stays on."""
+    """Each tasked camera's frame goes to its own node, built on its own camera's background
+    and sight range for a person of the scene's height and width; a node starts a fresh
+    temporal filter only when it is switched on, not while it stays on."""
     import render
     from testbed import loop
 
     lab = load_scene("lab")
-    rendered, reset, processed = [], [], []
+    rendered, reset, processed, built, asked = [], [], [], [], []
 
     class Renderer:
         def __init__(self, scene):
             self.n = len(scene.cameras)
 
         def background(self):
-            return type("F", (), {"rgb": np.zeros((self.n, 2, 4, 3), np.uint8)})
+            return type("F", (), {"rgb": np.stack([np.full((2, 4, 3), 100 + c, np.uint8) for c in range(1, self.n + 1)])})
 
         def render(self, positions, cameras, rng):
             rendered.append(tuple(cameras))
@@ -797,9 +798,11 @@ def test_a_live_source_renders_only_the_tasked_cameras_and_resets_a_node_switche
     class Pipeline:
         def __init__(self, cameras, params, background):
             self.number = cameras[0].number
+            built.append((self.number, background.shape, int(background[0, 0, 0, 0])))
             self.bearings = np.array([[0.2, 0.1, 0.0, -0.1]])
 
         def sight_range(self, height, object_width):
+            asked.append((height, object_width))
             return np.array([0.1 * self.number]), np.array([10.0 + self.number])
 
         def reset(self):
@@ -813,6 +816,8 @@ def test_a_live_source_renders_only_the_tasked_cameras_and_resets_a_node_switche
     monkeypatch.setattr(loop, "Pipeline", Pipeline)
     source = loop.LiveSource(lab, None, np.random.default_rng(0))
     assert source.near[5] == pytest.approx(0.5) and source.far[5] == pytest.approx(15.0)
+    assert built == [(c, (1, 2, 4, 3), 100 + c) for c in range(1, 17)]
+    assert asked == [(1.75, 0.5)] * 16
     first, rgb = source.scanlines(0, np.zeros((3, 2)), (3, 4))
     second, _ = source.scanlines(1, np.zeros((3, 2)), (4, 6))
     source.scanlines(2, np.zeros((3, 2)), (3, 6))
