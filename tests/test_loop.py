@@ -324,6 +324,26 @@ def test_feedback_tracks_tasks_from_the_trackers_predictions(monkeypatch):
         assert not (passed[i].shape == centres.shape and np.allclose(passed[i], centres))
 
 
+def test_feedback_tracks_tasks_from_a_tracker_of_the_people_s_size_fed_the_hull_centres(monkeypatch):
+    """Each frame's tracks are those of tracker_params' tracker stepped with the frame's polygon
+    centres, and the tasker gets its next-frame predictions of the confirmed tracks (the
+    centres while there is none), not the positions just seen."""
+    from tasking.tracker import Tracker
+    from testbed.loop import tracker_params
+
+    given, results = _estimates_with_tracks_feedback(monkeypatch, 8)
+    tracker = Tracker(tracker_params(load_scene("lab")))
+    moved = 0
+    for r, passed in zip(results[:-1], given[1:], strict=True):
+        ids, xy = tracker.step(r.estimates)
+        np.testing.assert_array_equal(r.track_ids, ids)
+        np.testing.assert_allclose(r.track_xy, xy, rtol=0, atol=1e-12)
+        predicted = tracker.estimates()
+        np.testing.assert_allclose(passed, predicted if len(predicted) else r.estimates, rtol=0, atol=1e-12)
+        moved += len(predicted) > 0 and not (predicted.shape == xy.shape and np.allclose(predicted, xy))
+    assert moved
+
+
 def test_more_people_than_labels_are_refused_before_the_walk(capsys, tmp_path, monkeypatch):
     """100000 people of 1 mm fit the floor, and `run` spent minutes dropping them before the
     renderer refused more than 254 (uint8 labels)."""
@@ -683,12 +703,13 @@ def test_the_summary_averages_the_frames_and_counts_every_switch(lab_episode):
 
 def test_hull_feedback_tasks_from_the_centres_of_the_frame_just_seen(lab_episode, monkeypatch):
     scene, truth, source = lab_episode
-    given = []
-    spy_on_tasker(monkeypatch, lambda a: given.append(np.array(a[5])))
+    given, radii = [], []
+    spy_on_tasker(monkeypatch, lambda a: given.append(np.array(a[5])) or radii.append(a[6]))
     results = list(run_loop(scene, LoopConfig("greedy", 8), truth, source))
     assert len(given) == len(results) and len(given[0]) == 0              # the first frame: uniform, no estimates
     for r, estimates in zip(results, given[1:]):
         assert len(r.estimates) and np.array_equal(estimates, r.estimates)
+    assert radii == [scene.people.radius] * len(results)                 # estimates: discs of the people's radius
 
 
 def test_a_summary_of_no_frames_or_nobody_has_no_tracking():
@@ -827,5 +848,128 @@ def test_a_live_source_renders_only_the_tasked_cameras_and_resets_a_node_switche
     assert processed == [(3, 3), (4, 4), (4, 4), (6, 6), (3, 3), (6, 6)]     # each frame to its own node
     np.testing.assert_array_equal(first, [[False] * 4, [True] * 4])
     np.testing.assert_array_equal(second, [[True] * 4, [True] * 4])
+    assert source.seconds["render"] > 0 and source.seconds["pipeline"] > 0
     kept = loop.LiveSource(lab, None, np.random.default_rng(0), keep_frames=True)
     assert kept.scanlines(0, np.zeros((3, 2)), (7,))[1][0, 0, 0, 0] == 7
+
+
+def test_scanline_views_agree_with_scanline_intervals_on_every_lab_camera(lab_episode):
+    """Cameras 6 and 8 of the lab look across +-180 degrees: their bearings wrap in the
+    row, and the view must still be the one scanline_intervals gives."""
+    from tasking.cones import scanline_intervals
+    from testbed.loop import scanline_views
+
+    _, _, source = lab_episode
+    bearings = np.array(list(source.bearings.values()))
+    assert (np.abs(np.diff(bearings, axis=1)) > np.pi).any(axis=1).sum() == 2
+    yaw, fov = scanline_views(bearings)
+    expected_yaw, expected_fov, _, _ = scanline_intervals(bearings, np.zeros(bearings.shape, bool))
+    np.testing.assert_allclose(np.angle(np.exp(1j * (yaw - expected_yaw))), 0, atol=1e-12)
+    np.testing.assert_allclose(fov, expected_fov, rtol=1e-12)
+    np.testing.assert_allclose(fov, fov[0], rtol=1e-9)          # one lens for all: one width
+
+
+def test_the_loop_tracks_with_the_tracking_study_s_settings_at_the_scene_s_frame_rate():
+    """The loop's tracker is the tracking study's for people of the scene's radius and speed,
+    stepping at the scene's frame rate."""
+    import dataclasses
+
+    from testbed.loop import tracker_params
+    from testbed.studies import tracking
+
+    lab = load_scene("lab")
+    assert tracker_params(lab) == tracking.tracker_params(0.25, 1.0)
+    other = dataclasses.replace(lab, frame_rate=15.0, people=dataclasses.replace(lab.people, radius=0.2, speed=1.5))
+    assert tracker_params(other) == dataclasses.replace(tracking.tracker_params(0.2, 1.5), dt=1 / 15)
+
+
+def test_hull_polygons_smaller_than_one_person_are_dropped(lab_episode, monkeypatch):
+    """A frame keeps exactly the hull's polygons of at least one person's disc: some dropped
+    ones had more than half of it, some kept ones less than 1.2 times it."""
+    from tasking import prune_small
+    from testbed import loop
+
+    scene, truth, source = lab_episode
+    real, hulls = loop.visual_hull_of_scanlines, []
+    monkeypatch.setattr(loop, "visual_hull_of_scanlines", lambda *a: hulls.append(real(*a)) or hulls[-1])
+    results = list(run_loop(scene, LoopConfig("uniform", 6), truth, source))
+    disc = np.pi * 0.25**2
+    dropped = []
+    for r, hull in zip(results, hulls, strict=True):
+        parts = sorted(p.area for p in prune_small(hull, 0))
+        assert sorted(p.area for p in r.polygons) == [a for a in parts if a >= disc]
+        dropped += [a for a in parts if a < disc]
+    assert any(disc / 2 < a < disc for a in dropped)
+    assert any(a < 1.2 * disc for r in results for a in (p.area for p in r.polygons))
+
+
+def test_cameras_carve_only_within_their_sight_radius(lab_episode):
+    """With sight radii the hull only grows (a camera carves nothing beyond it); near_field=False
+    carves to the walls."""
+    scene, truth, source = lab_episode
+    bearings = np.array(list(source.bearings.values()))
+    short = PrecomputedSource(source.all, bearings, far=np.full(16, 2.0))
+    plain = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", 6), truth, source)]
+    carved_near = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", 6), truth, short)]
+    switched_off = [r.hull_area for r in run_loop(scene, LoopConfig("uniform", 6, near_field=False), truth, short)]
+    assert switched_off == plain
+    assert all(a >= b - 1e-9 for a, b in zip(carved_near, plain)) and sum(carved_near) > sum(plain)
+
+
+def _everything_seen(frames, people=1):
+    """A lab source whose cameras see something in every column: the hull is the whole room."""
+    bearings = np.tile(np.linspace(0.4, -0.4, 64), (16, 1))
+    return np.full((frames, people, 2), 3.0), PrecomputedSource(np.ones((frames, 16, 64), bool), bearings)
+
+
+def test_uniform_and_clustering_without_directions_task_the_scene_s_own_sets():
+    """The lab's paper sets where it has one for k (6, 8, 10), uniform_select's otherwise;
+    clustering with one estimate (no pair of them to take a direction from) re-tasks the same."""
+    from tasking import uniform_select
+
+    lab = load_scene("lab")
+    truth, source = _everything_seen(3)
+    spread = {k: tuple(int(i) + 1 for i in uniform_select(16, k)) for k in (4, 6, 10)}
+    assert lab.uniform_sets[6] != spread[6] and lab.uniform_sets[10] != spread[10]
+    for tasker, k, expected in [("uniform", 6, lab.uniform_sets[6]), ("clustering", 10, lab.uniform_sets[10]),
+                                ("uniform", 4, spread[4])]:
+        results = list(run_loop(lab, LoopConfig(tasker, k), truth, source))
+        assert [len(r.estimates) for r in results] == [1, 1, 1]
+        assert [r.tasked for r in results] == [tuple(expected)] * 3, tasker
+
+
+def test_the_loop_adds_its_time_per_stage_to_the_seconds_given():
+    lab = load_scene("lab")
+    truth, source = _everything_seen(3)
+    seconds = {"hull": 100.0, "other": 1.0}
+    list(run_loop(lab, LoopConfig("greedy", 4), truth, source, seconds=seconds))
+    assert seconds["hull"] > 100.0 and seconds["other"] == 1.0
+    assert seconds["tracker"] > 0 and seconds["tasker"] > 0
+    before = dict(seconds)
+    list(run_loop(lab, LoopConfig("greedy", 4), truth, source, seconds=seconds))
+    assert all(seconds[s] > before[s] for s in ("hull", "tracker", "tasker"))
+
+
+def test_each_frame_keeps_the_rgb_frames_its_source_gave():
+    class Framed(PrecomputedSource):
+        def scanlines(self, index, positions_xy, numbers):
+            return super().scanlines(index, positions_xy, numbers)[0], np.full((len(numbers), 2, 2, 3), index)
+
+    lab = load_scene("lab")
+    truth, source = _everything_seen(3)
+    framed = Framed(source.all, np.array(list(source.bearings.values())))
+    results = list(run_loop(lab, LoopConfig("greedy", 4), truth, framed))
+    assert [r.rgb.shape for r in results] == [(4, 2, 2, 3)] * 3
+    assert [int(r.rgb.max()) for r in results] == [0, 1, 2]
+
+
+def test_a_summary_before_any_track_is_confirmed_has_null_mean_errors():
+    """Two frames confirm no track (three matches do): nothing matched, so mse and motp
+    are None (JSON has no NaN), and every person-frame is a miss."""
+    lab = load_scene("lab")
+    truth, source = _everything_seen(2)
+    results = list(run_loop(lab, LoopConfig("greedy", 4), truth, source))
+    tracking = summarise(results, lab)["tracking"]
+    assert tracking["mse"] is None and tracking["motp"] is None
+    assert tracking["matches"] == 0 and tracking["misses"] == 2
+    assert all(v is not None for k, v in tracking.items() if k not in ("mse", "motp"))
