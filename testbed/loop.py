@@ -206,7 +206,7 @@ def scanline_views(bearings) -> tuple[np.ndarray, np.ndarray]:
         right (decreasing, as the pipeline's; increasing ones, of a hand-made source, are
         read right to left). Not the optical axis and the pinhole's field of view: an
         off-centre principal point turns the view from the axis, a barrel lens widens it,
-        and the pitch and the rectification narrow it (lab: 49.16 degrees, 0.21 off the
+        and the pitch and the rectification narrow it (lab: 49.15 degrees, 0.21 off the
         axis).
 
     The same view as :func:`tasking.cones.scanline_intervals` gives, but for the yaw's last
