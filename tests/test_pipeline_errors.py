@@ -369,6 +369,7 @@ def test_a_calibration_of_fewer_or_more_distortion_coefficients_is_read_as_five(
     ([-0.18, 0.06, 0, 0, 0, 1e-9, 0, 0], "k4 = 1e-09"),
     ([-0.18, 0.06, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, -0.01], "tauY = -0.01"),
     ([-0.18, 0.06, 0, 0, 0, 0, 0, 0, 0.2, 0.5, 0, 0], "s1 = 0.2"),
+    ([-0.18, 0.06, 0, 0, 0] + [0] * 9 + [0.5], "coefficient 15 = 0.5"),        # the first past tauY
     ([-0.18, 0.06, 0, 0, 0] + [0] * 10 + [0.5], "coefficient 16 = 0.5"),       # more than OpenCV has
 ])
 def test_distortion_coefficients_past_k3_that_are_not_zero_are_refused(tmp_path, dist, term):
@@ -395,6 +396,17 @@ def test_a_calibration_without_a_number_is_camera_1_and_a_single_coefficient_is_
     (tmp_path / "lens.yaml").write_text(text[:start] + "distortion_coefficients: -0.25\n" + text[end:])
     cam = load_calibration(tmp_path / "lens.yaml")
     assert cam.number == 1 and cam.dist.tolist() == [-0.25, 0.0, 0.0, 0.0, 0.0]
+
+
+def test_a_whole_number_where_numbers_are_expected_is_that_number(tmp_path):
+    """``distortion_coefficients: 0`` is an integer to FileStorage, not a real: k1 = 0."""
+    from pipeline.io import load_calibration
+
+    text = _calibration_text(tmp_path)
+    start = text.index("distortion_coefficients:")
+    end = text.index("rvec:")
+    (tmp_path / "lens.yaml").write_text(text[:start] + "distortion_coefficients: 0\n" + text[end:])
+    assert load_calibration(tmp_path / "lens.yaml").dist.tolist() == [0.0] * 5
 
 
 def test_calibration_keys_may_be_lists_of_numbers(tmp_path):
