@@ -89,6 +89,16 @@ def test_frames_missing_from_one_camera_are_refused(render_dir, tmp_path):
             RenderDir(root)
 
 
+def test_frames_of_other_names_in_one_camera_are_refused(render_dir, tmp_path):
+    """As many frames in each camera, but one named otherwise: frames are matched by name, not count."""
+    root = tmp_path / "renamed"
+    shutil.copytree(render_dir, root)
+    (root / "frames" / "cam02" / "000003.png").rename(root / "frames" / "cam02" / "000004.png")
+    with pytest.raises(ValueError, match=r"frames/cam02 and .*frames/cam01 hold different frames "
+                                         r"\(4 and 4; 000003.png is in one only\)"):
+        RenderDir(root)
+
+
 def test_a_bad_people_table_or_meta_stops_before_the_frames(render_dir, tmp_path, monkeypatch):
     root = tmp_path / "render"
     shutil.copytree(render_dir, root)
