@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import scene
-from pipeline.io import RenderDir, iter_video_frames, read_labels
+from pipeline.io import RenderDir, iter_video_frames, number_in_name, read_labels
 from pipeline.synthetic import synthetic_sequence, write_render_dir
 from testbed.commands import scanlines as scanlines_cmd
 
@@ -228,15 +228,39 @@ def test_names_of_equal_numbers_are_ordered_as_text():
     assert sorted(["f1.png", "f01.png", "f001.png"], key=number_order) == ["f001.png", "f01.png", "f1.png"]
 
 
-def test_a_folder_in_place_of_a_frame_file_is_missing(tmp_path):
+@pytest.mark.parametrize("kind", ["masks", "frames"])
+def test_a_folder_in_place_of_a_frame_file_is_missing(tmp_path, kind):
     from tests.test_pipeline_cli import small_render_dir
 
     small_render_dir(tmp_path, 2, 4)
-    mask = tmp_path / "masks" / "cam02" / "000001.png"
-    mask.unlink()
-    mask.mkdir()
+    gone = tmp_path / kind / "cam02" / "000001.png"
+    gone.unlink()
+    gone.mkdir()
     r = RenderDir(tmp_path)
     r.check_complete(1)                                     # frame 0 only: complete
     with pytest.raises(ValueError) as err:
         r.check_complete(2)
-    assert str(err.value) == f"DIR: {tmp_path} lacks 1 file of its first 2 frames: masks/cam02/000001.png"
+    assert str(err.value) == f"DIR: {tmp_path} lacks 1 file of its first 2 frames: {kind}/cam02/000001.png"
+
+
+def test_a_folder_of_images_of_every_suffix_is_read(tmp_path):
+    """PNG, JPEG, BMP, TIFF, PPM and PGM exports are frames, any other file is not."""
+    folder = tmp_path / "clip"
+    folder.mkdir()
+    suffixes = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".ppm", ".pgm")
+    for i, suffix in enumerate(suffixes):                   # a PGM is grey, a PPM colour
+        assert cv2.imwrite(str(folder / f"f{i}{suffix}"), np.full((4, 6, 1 if suffix == ".pgm" else 3), 10 * i + 5,
+                                                                    np.uint8))
+    (folder / "f9.txt").write_text("notes")
+    got = list(iter_video_frames(folder))
+    assert [f.shape for f in got] == [(4, 6, 3)] * len(suffixes)
+    assert [int(f[0, 0, 0]) for f in got] == [10 * i + 5 for i in range(len(suffixes))]
+
+
+def test_the_number_of_a_calibration_file_name():
+    """``camNN`` anywhere in the file's name, of any number of digits; a name without it has
+    the default, ``None`` unless given."""
+    assert number_in_name("calibration/cam07.yaml") == 7
+    assert number_in_name("left_cam123b.xml") == 123
+    assert number_in_name("lens.yaml") is None and number_in_name("cam.yaml") is None
+    assert number_in_name("lens.yaml", default=4) == 4
