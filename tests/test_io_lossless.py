@@ -192,6 +192,75 @@ def test_a_video_frame_read_again_is_not_decoded_again(tmp_path, monkeypatch):
     r.close()
 
 
+def video_render_dir(root, frames):
+    """``root`` made a render directory of one camera whose ``frames`` frames are frames/cam01.mkv;
+    returns the frames."""
+    import shutil
+
+    import scene
+    from pipeline.synthetic import synthetic_sequence, write_render_dir
+
+    cam = scene.Camera.from_pose(1, [1.5, 0.05, 2.2], np.radians(70), np.radians(15), 41, 30, np.radians(49),
+                                 [0, 0, 0, 0, 0])
+    bg, images, labels = synthetic_sequence([cam], frames, np.random.default_rng(5))
+    write_render_dir(root, [cam], bg, images, labels)
+    shutil.rmtree(root / "frames" / cam.name)
+    write(root / "frames" / f"{cam.name}.mkv", list(images[:, 0]))
+    return images
+
+
+def test_the_videos_decoders_are_stopped_before_others_start_and_by_close(tmp_path, monkeypatch):
+    """An earlier frame starts the videos again: the ffmpeg decoding them before stops first,
+    not once collected; close() stops the last ones."""
+    from pipeline.io import RenderDir
+    from testbed import lossless
+
+    frames = video_render_dir(tmp_path, 3)
+    decoders = []
+    real = lossless.read_video
+
+    def read_video(*args, **kwargs):
+        assert all(d.gi_frame is None for d in decoders), "a decoder still runs"
+        decoders.append(real(*args, **kwargs))
+        return decoders[-1]
+
+    monkeypatch.setattr(lossless, "read_video", read_video)
+    r = RenderDir(tmp_path)
+    np.testing.assert_array_equal(r.frames(1), frames[1])
+    np.testing.assert_array_equal(r.frames(0), frames[0])
+    assert len(decoders) == 2 and decoders[1].gi_frame is not None
+    r.close()
+    assert decoders[1].gi_frame is None
+
+
+def test_a_video_read_interrupted_is_read_again_from_its_start(tmp_path, monkeypatch):
+    """Ctrl-C while decoding (a KeyboardInterrupt, no Exception) leaves the decoders between
+    frames: the next read starts them again."""
+    from pipeline.io import RenderDir
+    from testbed import lossless
+
+    frames = video_render_dir(tmp_path, 3)
+    opened = []
+    real = lossless.read_video
+
+    def read_video(*args, **kwargs):
+        opened.append(args[0])
+        decoder = real(*args, **kwargs)
+        yield next(decoder)
+        if len(opened) == 1:
+            decoder.close()
+            raise KeyboardInterrupt
+        yield from decoder
+
+    monkeypatch.setattr(lossless, "read_video", read_video)
+    r = RenderDir(tmp_path)
+    with pytest.raises(KeyboardInterrupt):
+        r.frames(1)
+    np.testing.assert_array_equal(r.frames(1), frames[1])
+    assert len(opened) == 2
+    r.close()
+
+
 @pytest.mark.parametrize(("script", "status"), [("exit 1", "failed with exit status 1"),
                                                 ("kill -9 $$", "was killed by signal 9")])
 def test_an_ffmpeg_that_fails_without_a_word_does_not_blame_the_video(tmp_path, monkeypatch, script, status):
