@@ -143,6 +143,11 @@ def test_camera_folders_without_frames_are_refused(tmp_path):
     with pytest.raises(ValueError) as err:
         RenderDir(tmp_path)
     assert str(err.value) == f"DIR: {tmp_path / 'frames' / 'cam01'} has no frames"
+    (tmp_path / "frames" / "cam01.mkv").mkdir()                # a folder so named is no video
+    with pytest.raises(ValueError) as err:
+        RenderDir(tmp_path)
+    assert str(err.value) == f"DIR: {tmp_path / 'frames' / 'cam01'} has no frames"
+    (tmp_path / "frames" / "cam01.mkv").rmdir()
     # no masks either for the videos of `render --format video`
     (tmp_path / "frames" / "cam01.mkv").write_bytes(b"")
     for png in (tmp_path / "masks").glob("cam*/*.png"):
@@ -264,3 +269,26 @@ def test_the_number_of_a_calibration_file_name():
     assert number_in_name("left_cam123b.xml") == 123
     assert number_in_name("lens.yaml") is None and number_in_name("cam.yaml") is None
     assert number_in_name("lens.yaml", default=4) == 4
+
+
+def test_a_label_image_of_another_size_is_named_as_a_mask(tmp_path):
+    from tests.test_pipeline_cli import small_render_dir
+
+    small_render_dir(tmp_path, 2, 4)
+    cv2.imwrite(str(tmp_path / "masks" / "cam02" / "000001.png"), np.zeros((4, 6), np.uint8))
+    r = RenderDir(tmp_path)
+    assert r.labels(0).shape == (2, 120, 160)
+    with pytest.raises(ValueError) as err:
+        r.labels(1)
+    assert str(err.value) == "masks: masks/cam02/000001.png is 6x4; expected 160x120 to match the calibration"
+
+
+def test_files_and_folders_not_named_cam_are_no_cameras(tmp_path):
+    """A note in calibration/ or a folder of previews in frames/ is left alone."""
+    from tests.test_pipeline_cli import small_render_dir
+
+    small_render_dir(tmp_path, 1, 4)
+    (tmp_path / "calibration" / "notes.yaml").write_text("lens: rented\n")
+    (tmp_path / "frames" / "previews").mkdir()
+    (tmp_path / "frames" / "all.mkv").write_bytes(b"")
+    assert [c.name for c in RenderDir(tmp_path).cameras] == ["cam01", "cam02"]
