@@ -192,21 +192,33 @@ def test_a_video_frame_read_again_is_not_decoded_again(tmp_path, monkeypatch):
     r.close()
 
 
-def video_render_dir(root, frames):
-    """``root`` made a render directory of one camera whose ``frames`` frames are frames/cam01.mkv;
-    returns the frames."""
+def video_render_dir(root, frames, numbers=(1,)):
+    """``root`` made a render directory of cameras ``numbers`` whose ``frames`` frames are
+    frames/camNN.mkv; returns the frames, (frames, cameras, H, W, 3) in the order of ``numbers``."""
     import shutil
 
     import scene
     from pipeline.synthetic import synthetic_sequence, write_render_dir
 
-    cam = scene.Camera.from_pose(1, [1.5, 0.05, 2.2], np.radians(70), np.radians(15), 41, 30, np.radians(49),
-                                 [0, 0, 0, 0, 0])
-    bg, images, labels = synthetic_sequence([cam], frames, np.random.default_rng(5))
-    write_render_dir(root, [cam], bg, images, labels)
-    shutil.rmtree(root / "frames" / cam.name)
-    write(root / "frames" / f"{cam.name}.mkv", list(images[:, 0]))
+    cams = [scene.Camera.from_pose(n, [1.5 + 0.5 * i, 0.05, 2.2], np.radians(70), np.radians(15), 41, 30,
+                                   np.radians(49), [0, 0, 0, 0, 0]) for i, n in enumerate(numbers)]
+    bg, images, labels = synthetic_sequence(cams, frames, np.random.default_rng(5))
+    write_render_dir(root, cams, bg, images, labels)
+    for i, cam in enumerate(cams):
+        shutil.rmtree(root / "frames" / cam.name)
+        write(root / "frames" / f"{cam.name}.mkv", list(images[:, i]))
     return images
+
+
+def test_videos_of_cameras_numbered_past_99_are_read_in_number_order(tmp_path):
+    """cam100.mkv sorts before cam11.mkv as text: each camera's frames are its own video's."""
+    from pipeline.io import RenderDir
+
+    frames = video_render_dir(tmp_path, 2, (100, 11))
+    r = RenderDir(tmp_path)
+    assert [c.number for c in r.cameras] == [11, 100]
+    np.testing.assert_array_equal(r.frames(1), frames[1, ::-1])
+    r.close()
 
 
 def test_the_videos_decoders_are_stopped_before_others_start_and_by_close(tmp_path, monkeypatch):
