@@ -161,6 +161,11 @@ class RenderDir:
             raise ValueError(f"{name}: {self.root} is not a render directory: it has no calibration/camNN.yaml files")
         # numbered as the files (and so the frames/camNN folders) are named
         self.cameras = tuple(load_calibration(p, number_in_name(p)) for p in calib)
+        for cam, path in zip(self.cameras, calib):
+            if path.stem != cam.name:           # camera N's frames, masks, ... are looked for as camNN
+                want = f"{cam.name}{path.suffix} for camera {cam.number}" if number_in_name(path) else "camNN.yaml"
+                raise ValueError(f"{name}: {path.relative_to(self.root)}: expected the name {want} (camNN, the "
+                                 "camera's number in two digits or more, as `camtask render` writes)")
         from .rectify import check_rectifiable
 
         # as `camtask render` checks its scene's: each lens once, not once per camera

@@ -292,3 +292,19 @@ def test_files_and_folders_not_named_cam_are_no_cameras(tmp_path):
     (tmp_path / "frames" / "previews").mkdir()
     (tmp_path / "frames" / "all.mkv").write_bytes(b"")
     assert [c.name for c in RenderDir(tmp_path).cameras] == ["cam01", "cam02"]
+
+
+@pytest.mark.parametrize("stem, want", [("cam1", "cam01.yaml for camera 1"), ("cam007", "cam07.yaml for camera 7"),
+                                        ("camera", "camNN.yaml")])
+def test_a_calibration_file_not_named_as_its_camera_is_refused_by_its_name(tmp_path, stem, want):
+    """Camera N's frames and masks are looked for as camNN: calibration/cam1.yaml beside
+    frames/cam1/ was refused as 'frames/cam1 has no calibration/cam1.yaml', a file that is there."""
+    from tests.test_pipeline_cli import small_render_dir
+
+    small_render_dir(tmp_path, 2, 4)
+    (tmp_path / "calibration" / "cam02.yaml").rename(tmp_path / "calibration" / f"{stem}.yaml")
+    (tmp_path / "frames" / "cam02").rename(tmp_path / "frames" / stem)
+    with pytest.raises(ValueError) as err:
+        RenderDir(tmp_path)
+    assert str(err.value) == (f"DIR: calibration/{stem}.yaml: expected the name {want} (camNN, the camera's "
+                              "number in two digits or more, as `camtask render` writes)")
