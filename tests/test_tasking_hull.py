@@ -285,6 +285,8 @@ def test_disc_errors(kwargs, match):
         ([[0.0, 0.1]], [[1, 0]], "scanlines must be a bool array"),
         ([[0.0, 0.2, 0.1]], [[True, False, True]], "strictly monotone"),
         ([[0.0]], [[True]], r"bearings must have shape \(1, W\) with W >= 2"),
+        ([0.3], [True], r"bearings must have shape \(1, W\) with W >= 2"),         # 1-d, one per camera
+        ([[0.0, 0.1], [0.0, 0.1]], [[True, False]] * 2, r"bearings must have shape \(1, W\)"),   # two rows, one camera
         ([[0.0, np.nan]], [[True, False]], "bearings must be finite"),
         ([[0.0, 3.0, 6.0]], [[True, False, True]], "span less than 2\\*pi"),
     ],
@@ -294,9 +296,10 @@ def test_scanline_errors(bearings, occ, match):
         visual_hull_of_scanlines([[-1, 0]], np.array(bearings), np.array(occ), SQUARE)
 
 
-def test_prune_small_rejects_negative_area():
-    with pytest.raises(ValueError, match="min_area"):
-        prune_small(SQUARE, -1.0)
+@pytest.mark.parametrize("min_area", [-1.0, np.nan, np.inf])
+def test_prune_small_rejects_negative_area(min_area):
+    with pytest.raises(ValueError, match="min_area must be finite and >= 0"):
+        prune_small(SQUARE, min_area)
 
 
 @pytest.mark.parametrize("behind", [np.pi, np.pi - 0.05, -np.pi + 0.05])
@@ -629,3 +632,20 @@ def test_non_monotone_bearings_name_the_first_bad_row():
     with pytest.raises(ValueError, match=r"strictly monotone along each row \(row 1\)"):
         free_wedges_from_scanlines(np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0]]), bearings,
                                    np.zeros((3, 3), bool), box(-1, -1, 1, 1))
+
+
+def test_free_wedges_skip_the_polygons_only_when_the_table_alone_is_asked_for():
+    """polygons=False builds no wedges only with return_cones: the table of free wedges of a
+    camera on the left wall, around a disc 1 m ahead, is its two sides of the FOV."""
+    args = ([[-1, 0]], [0.0], np.pi, [[0, 0]], R, SQUARE)
+    plain = free_wedges_from_discs(*args)
+    assert shapely.equals(free_wedges_from_discs(*args, polygons=False)[0], plain[0])
+    wedges, (camera, apex, theta0, theta1) = free_wedges_from_discs(*args, return_cones=True, polygons=False)
+    assert wedges is None
+    assert camera.tolist() == [0, 0]
+    np.testing.assert_array_equal(apex, [[-1, 0], [-1, 0]])
+    half = np.arcsin(R)
+    np.testing.assert_allclose(theta0, [-np.pi / 2, half], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(theta1, [-half, np.pi / 2], rtol=0, atol=1e-12)
+    built, _ = free_wedges_from_discs(*args, return_cones=True)
+    assert shapely.equals(built[0], plain[0])
