@@ -649,3 +649,32 @@ def test_free_wedges_skip_the_polygons_only_when_the_table_alone_is_asked_for():
     np.testing.assert_allclose(theta1, [-half, np.pi / 2], rtol=0, atol=1e-12)
     built, _ = free_wedges_from_discs(*args, return_cones=True)
     assert shapely.equals(built[0], plain[0])
+
+
+@pytest.mark.parametrize("near, kept", [(0.99, True), (0.9901, False)])
+def test_a_wedge_is_kept_while_its_blind_radius_is_under_far_cos_squared_of_half_an_arc_step(near, kept):
+    """Two columns at -0.4 and 0.4 rad: one free wedge of 1.6 rad, nine arc points 0.2 rad
+    apart; with far 1 it is kept for near < cos(0.1)^2 = 0.990033 (the inner arc at
+    near / cos(0.1), eight chord triangles out minus in), dropped above."""
+    room = box(-3, -3, 3, 3)
+    (w,) = free_wedges_from_scanlines([[0.0, 0.0]], [[-0.4, 0.4]], np.zeros((1, 2), bool), room,
+                                      near=near, far=1.0)
+    if not kept:
+        assert w.is_empty
+        return
+    r_in = near / np.cos(0.1)
+    assert w.area == pytest.approx(0.5 * 8 * np.sin(0.2) * (1.0 - r_in**2), rel=1e-9)
+
+
+def test_a_blind_radius_beyond_the_wedges_reach_frees_nothing_beside_a_camera_that_sees():
+    """Camera 0 blind out to 50 m in a 2 x 2 m room (its sight radius 1 km): it proves nothing
+    empty, however far it sees; camera 1 beside it keeps its own near and far radii."""
+    bearings = np.array([[-0.4, 0.4], [np.pi - 0.4, np.pi + 0.4]])
+    xy = [[-0.9, 0.0], [0.9, 0.0]]
+    free = np.zeros((2, 2), bool)
+    w = free_wedges_from_scanlines(xy, bearings, free, SQUARE, near=[50.0, 0.1], far=[1000.0, 1.0])
+    assert w[0].is_empty
+    alone = free_wedges_from_scanlines(xy[1:], bearings[1:], free[1:], SQUARE, near=0.1, far=1.0)
+    assert not alone[0].is_empty and sym_diff_area(w[1], alone[0]) < 1e-12
+    hull = hull_from_wedges(w, SQUARE, [0])
+    assert sym_diff_area(hull, SQUARE) < 1e-12
