@@ -678,3 +678,69 @@ def test_a_blind_radius_beyond_the_wedges_reach_frees_nothing_beside_a_camera_th
     assert not alone[0].is_empty and sym_diff_area(w[1], alone[0]) < 1e-12
     hull = hull_from_wedges(w, SQUARE, [0])
     assert sym_diff_area(hull, SQUARE) < 1e-12
+
+
+def test_hulls_drop_the_slivers_their_overlays_leave_on_either_path():
+    """A wedge that frees all of a 1 m square but a strip 5e-13 m high (area 5e-13 m^2, under
+    SLIVER times the room's area) leaves an empty hull, alone and as 33 copies (the union path)."""
+    room = box(0, 0, 1, 1)
+    w = np.array([box(-1, 5e-13, 2, 2)], dtype=object)
+    assert not shapely.difference(room, w[0]).is_empty          # the strip is there
+    assert hull_from_wedges(w, room).is_empty
+    assert hull_from_wedges(np.repeat(w, 33), room).is_empty
+
+
+def test_drop_slivers_of_one_polygon_and_at_the_threshold_itself():
+    """A lone polygon of area SLIVER * room.area (1e-12 m^2 in a 1 m square) or less is dropped,
+    one twice as large stays; so in a collection."""
+    from tasking.hull import drop_slivers
+
+    room = box(0, 0, 1, 1)
+    at, above, big = box(0, 0, 1, 1e-12), box(0, 0.5, 1, 0.5 + 2e-12), box(0, 0.7, 1, 1)
+    assert drop_slivers(at, room).is_empty
+    assert drop_slivers(above, room).equals(above)
+    got = drop_slivers(GeometryCollection([at, big]), room)
+    assert shapely.get_num_geometries(got) == 1 and sym_diff_area(got, big) == 0.0
+
+
+def test_regions_from_discs_lie_in_the_room_and_hold_no_slivers():
+    """180-degree cameras on the walls of a 4 x 3 m room: the empty regions are clipped to
+    the room, and the "not proven empty" regions, room minus wedges, hold one polygon each (the
+    plain differences leave zero-area parts along the walls)."""
+    room = box(0, 0, 4, 3)
+    xy = np.array([[1.3, 0.0], [4.0, 1.1], [2.7, 3.0], [0.0, 1.9]])
+    yaw = np.array([0.5, 1.0, -0.5, 0.0]) * np.pi
+    centre = np.array([[2.0, 1.5]])
+    empties = empty_regions_from_discs(xy, yaw, np.pi, centre, 0.3, room)
+    regions = camera_regions_from_discs(xy, yaw, np.pi, centre, 0.3, room)
+    raw = shapely.difference(room, free_wedges_from_discs(xy, yaw, np.pi, centre, 0.3, room))
+    assert max(shapely.get_num_geometries(raw)) > 1                 # slivers were there
+    for empty, region in zip(empties, regions):
+        assert empty.difference(room).area == 0.0
+        assert shapely.get_num_geometries(region) == 1
+        assert region.area == pytest.approx(room.area - empty.area, rel=0, abs=1e-12)
+
+
+def test_regions_from_scanlines_keep_near_and_far_and_hold_no_slivers():
+    """A camera in the middle of the square, blind to 0.3 m and seeing to 0.8 m, with nothing
+    in view: its empty region is a ring sector between the two circles, its other region the
+    rest of the room. 180-degree wall cameras' regions are one polygon each."""
+    from tasking import empty_regions_from_scanlines
+
+    bearings = np.array([[-1.5, -0.5, 0.5, 1.5]]) * np.pi / 8           # edges -pi/4 .. pi/4
+    args = ([[0.0, 0.0]], bearings, np.zeros((1, 4), bool), SQUARE)
+    (empty,) = empty_regions_from_scanlines(*args, near=0.3, far=0.8)
+    (region,) = camera_regions_from_scanlines(*args, near=0.3, far=0.8)
+    sector = 0.5 * (np.pi / 2) * (0.8**2 - 0.3**2)
+    assert empty.area == pytest.approx(sector, rel=0.02) and empty.area < sector
+    assert empty.intersection(Point(0, 0).buffer(0.3, quad_segs=256)).area < 1e-12
+    assert empty.difference(Point(0, 0).buffer(0.8 + 1e-9, quad_segs=256)).area < 1e-12
+    assert region.area == pytest.approx(SQUARE.area - empty.area, rel=0, abs=1e-12)
+    room = box(0, 0, 4, 3)
+    xy = np.array([[1.3, 0.0], [4.0, 1.1], [2.7, 3.0], [0.0, 1.9]])
+    bearings, occ = scanlines_from_discs(xy, np.array([0.5, 1.0, -0.5, 0.0]) * np.pi, np.pi,
+                                         np.array([[2.0, 1.5]]), 0.3, 64)
+    empties = empty_regions_from_scanlines(xy, bearings, occ, room)
+    for empty, region in zip(empties, camera_regions_from_scanlines(xy, bearings, occ, room)):
+        assert empty.difference(room).area == 0.0
+        assert shapely.get_num_geometries(region) == 1
