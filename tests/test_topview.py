@@ -367,3 +367,35 @@ def test_legend_words_end_before_the_next_mark():
     assert all(s2 - s1 > 40 for s1, s2 in itertools.pairwise(starts))     # a word of 4+ letters between marks
     for s in starts[1:]:
         assert np.all(strip[:, s - 10:s - 3] == BACKGROUND), s          # (the mark's own soft edge nearer)
+
+
+def test_overlapping_cones_darken_and_reach_the_far_corner():
+    """Each of k tasked cameras' cones shades the floor 1/k of the way to half CONE: where
+    cameras 1 and 2 both see occlusion the blend is half way, where camera 1 alone a
+    quarter; the cones reach the room's far corner, 8.2 m from camera 1 (further than the
+    room is long)."""
+    scene = load_scene("lab")
+    _, yaw, fov = scene.floor_poses()
+    view = TopView(scene, width=400)
+    bearings = {n: yaw[n - 1] + np.linspace(0.45, -0.45, 10) * fov[n - 1] for n in range(1, 17)}
+    img = view.draw(_lab_frame((1, 2), np.ones((2, 10))), bearings, title=" ")
+    for p, blend in (([6.6, 5.7], (185, 205, 240)),              # both cameras' cones, at the far corner
+                     ([3.3, 3.0], (185, 205, 240)),
+                     ([5.0, 2.5], (217.5, 227.5, 245))):         # camera 1's alone (camera 2 sees 46-95 deg)
+        u, v = view.px(p)
+        np.testing.assert_allclose(img[v, u], blend, atol=1, err_msg=str(p))
+
+
+def test_with_no_camera_tasked_the_floor_is_unshaded():
+    """No tasked camera: no cone, the floor is background (no 0 / 0 shade)."""
+    import warnings
+
+    scene = load_scene("lab")
+    view = TopView(scene, width=400)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        img = view.draw(_lab_frame((), np.zeros((0, 10))), {n: np.linspace(0.5, -0.5, 10) for n in range(1, 17)},
+                        title=" ")
+    u, v = view.px([3.0, 3.0])
+    assert tuple(img[v, u]) == BACKGROUND
+
