@@ -399,3 +399,120 @@ def test_with_no_camera_tasked_the_floor_is_unshaded():
     u, v = view.px([3.0, 3.0])
     assert tuple(img[v, u]) == BACKGROUND
 
+
+def test_the_walls_are_drawn_all_round_the_room():
+    """The room's outline in WALL, its closing side (last corner back to the first) too."""
+    from testbed.topview import WALL
+
+    scene = load_scene("lab")
+    view = TopView(scene, width=400)
+    img = view.draw(_lab_frame((), np.zeros((0, 10))), {n: np.linspace(0.5, -0.5, 10) for n in range(1, 17)},
+                    title=" ")
+    corners = scene.room.vertices
+    for a, b in zip(corners, np.roll(corners, -1, axis=0)):
+        for t in (0.2, 0.7):                                    # clear of the cameras' marks on the walls
+            u, v = view.px(a + t * (b - a))
+            assert tuple(img[v, u]) == WALL, (a, b, t)
+
+
+def test_every_camera_is_marked_and_numbered():
+    """Cameras 1 to 16 each get a grey dot and their number in dark text up and right of
+    it (clear of the walls); two-digit numbers are written wider than one-digit ones."""
+    import cv2
+
+    scene = load_scene("lab")
+    xy, _, _ = scene.floor_poses()
+    view = TopView(scene, width=400)
+    img = view.draw(_lab_frame((), np.zeros((0, 10))), {n: np.linspace(0.5, -0.5, 10) for n in range(1, 17)},
+                    title=" ")
+    near_wall = np.zeros((view.height, view.width), np.uint8)
+    cv2.polylines(near_wall, [view.px(scene.room.vertices)], True, 1, 8)
+    dark = (img.max(axis=2) < 120) & (near_wall == 0)
+    widths = {}
+    for n in range(1, 17):
+        u, v = view.px(xy[n - 1])
+        assert tuple(img[v, u]) == CAMERA_OFF, n
+        cols = np.flatnonzero(dark[v - 18:v - 4, u + 5:u + 30].any(axis=0))
+        assert cols.size, n
+        widths[n] = cols.max() - cols.min()
+    assert max(widths[n] for n in range(1, 10)) < min(widths[n] for n in range(10, 17))
+
+
+def test_a_track_is_a_cross_at_its_position_with_its_number_below_right():
+    """A track is marked by a red cross at its position, its number written down and right
+    of it: tracks 7 and 8 at one place differ only there."""
+    from testbed.topview import TRACK
+
+    scene = load_scene("lab")
+    bearings = {n: np.linspace(0.5, -0.5, 10) for n in range(1, 17)}
+
+    def draw(i):
+        frame = FrameResult(0, (), np.zeros((0, 10), bool), [], 0.0, 0.0, 0, (), (), np.zeros((0, 2)),
+                            np.zeros((0, 2)), np.array([i]), np.array([[3.0, 3.0]]))
+        return view.draw(frame, bearings, title=" ")
+
+    view = TopView(scene, width=400)
+    seven = draw(7)
+    u, v = view.px([3.0, 3.0])
+    for du, dv in ((0, 0), (-4, 0), (4, 0), (0, -4), (0, 4)):
+        assert tuple(seven[v + dv, u + du]) == TRACK, (du, dv)
+    assert tuple(seven[v - 4, u - 4]) == BACKGROUND                  # a cross, not a square
+    view = TopView(scene, width=400)
+    rr, cc = np.nonzero(np.any(seven != draw(8), axis=2))
+    assert rr.size and rr.min() > v - 6 and cc.min() > u + 4         # only the number differs
+
+
+def test_the_title_is_the_frame_s_unless_given():
+    """Without a title the top left reads the frame's index, hull area and residual: frames
+    of other hull areas are titled otherwise; a given title replaces it."""
+    scene = load_scene("lab")
+    view = TopView(scene, width=400)
+    bearings = {n: np.linspace(0.5, -0.5, 10) for n in range(1, 17)}
+
+    def draw(hull, title):
+        frame = FrameResult(0, (), np.zeros((0, 10), bool), [], hull, 0.0, 0, (), (), np.zeros((0, 2)),
+                            np.zeros((0, 2)), np.zeros(0, int), np.zeros((0, 2)))
+        return view.draw(frame, bearings, title=title)[:25, :300]
+
+    assert not np.array_equal(draw(1.0, ""), draw(2.0, ""))
+    assert np.array_equal(draw(1.0, "a title"), draw(2.0, "a title"))
+    assert not np.array_equal(draw(1.0, "a title"), draw(1.0, " "))
+
+
+def test_a_person_s_ring_has_their_radius_in_pixels_and_at_least_2():
+    """At 96 pixels a metre a 0.25 m person is a ring 24 pixels round (2 thick: solid from
+    23 to 25, clear at 21 and 27); a 0.01 m one (1 pixel) a ring of 2."""
+    from scene import Scene
+    from testbed.topview import TRUTH
+
+    for radius, r in ((0.25, 24), (0.01, 2)):
+        scene = Scene.from_text(CORRIDOR.replace("width: 1.0, depth: 100.0", "width: 3.0, depth: 4.0")
+                                .replace("radius: 0.25", f"radius: {radius}"), "room.yaml")
+        view = TopView(scene, width=444, margin=30)
+        assert view.scale == pytest.approx(96.0)
+        img = view.draw(_lab_frame((), np.zeros((0, 10)), truth=[[1.5, 2.0]]), {1: np.linspace(0.5, -0.5, 10)},
+                        title=" ")
+        u, v = view.px([1.5, 2.0])
+        for d in (r - 1, r, r + 1):
+            assert tuple(img[v, u + d]) == TRUTH and tuple(img[v - d, u]) == TRUTH, (radius, d)
+        assert tuple(img[v, u + r + 3]) == BACKGROUND, radius
+        if r > 3:
+            assert tuple(img[v, u + r - 3]) == BACKGROUND, radius
+
+
+def test_draw_puts_the_legend_in_the_bottom_margin_each_mark_level_with_its_word():
+    """The picture's bottom margin (below the wall) holds the legend's five coloured marks,
+    each vertically within the rows of the word written after it."""
+    view = TopView(load_scene("lab"), width=720)
+    img = view.draw(_lab_frame((), np.zeros((0, 10))), {n: np.linspace(0.5, -0.5, 10) for n in range(1, 17)},
+                    title=" ")
+    strip = img[view.height - view.margin + 6:].astype(int)
+    coloured = strip.max(axis=2) - strip.min(axis=2) > 40
+    text = (strip.max(axis=2) < 200) & ~coloured
+    cols = np.flatnonzero(coloured.any(axis=0))
+    groups = np.split(cols, np.flatnonzero(np.diff(cols) > 1) + 1)
+    assert len(groups) == 5
+    for g, nxt in zip(groups, [*(h[0] for h in groups[1:]), strip.shape[1]]):
+        mark = np.flatnonzero(coloured[:, g].any(axis=1))
+        word = np.flatnonzero(text[:, g[-1] + 4:nxt - 3].any(axis=1))
+        assert word.size and word.min() <= (mark.min() + mark.max()) / 2 <= word.max(), g[0]
