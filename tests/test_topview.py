@@ -516,3 +516,23 @@ def test_draw_puts_the_legend_in_the_bottom_margin_each_mark_level_with_its_word
         mark = np.flatnonzero(coloured[:, g].any(axis=1))
         word = np.flatnonzero(text[:, g[-1] + 4:nxt - 3].any(axis=1))
         assert word.size and word.min() <= (mark.min() + mark.max()) / 2 <= word.max(), g[0]
+
+
+def test_mosaic_tiles_average_their_frames_keep_their_aspect_and_name_their_cameras():
+    """A 200-column frame in a 100-pixel tile averages each pair of columns (one-pixel black
+    and white stripes come out mid grey, not all one or the other); a 47 x 80 frame's tile
+    is the nearest 59 rows high (58.75); the label is the camera's number: renumbering one
+    camera changes its tile's label alone."""
+    from testbed.topview import mosaic
+
+    stripes = np.zeros((3, 40, 200, 3), np.uint8)
+    stripes[:, :, ::2] = 255
+    out = mosaic(stripes, np.zeros((3, 200), bool), (1, 5, 9), 300)
+    assert out.shape == (20 + 14, 300, 3)
+    assert np.all(np.abs(out[15:20].astype(int) - 127.5) <= 1)    # below the labels
+    small = np.full((3, 47, 80, 3), 90, np.uint8)
+    scans = np.zeros((3, 80), bool)
+    out = mosaic(small, scans, (1, 5, 9), 300)
+    assert out.shape == (59 + 14, 300, 3) and np.all(out[58, :, 0] == 90) and np.all(out[59, :, 0] == 220)
+    rr, cc = np.nonzero(np.any(out != mosaic(small, scans, (1, 6, 9), 300), axis=2))
+    assert rr.size and rr.max() < 20 and cc.min() >= 100 and cc.max() < 200
