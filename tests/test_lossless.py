@@ -224,3 +224,37 @@ def test_ffmpeg_s_message_loses_every_context_prefix_and_blank_line():
     assert _message(io.BytesIO(b"\n  \n")) == "no message"
     log = io.BytesIO(b"[in#0 @ 0xabc] moov atom not found\n\nError opening input files: Invalid data\n")
     assert _message(log) == "Error opening input files: Invalid data"
+
+
+def test_an_ffmpeg_imageio_ffmpeg_cannot_find_or_names_but_lacks_is_one_line(tmp_path, monkeypatch):
+    """imageio-ffmpeg's error is folded onto one line; a binary it names itself (not
+    IMAGEIO_FFMPEG_EXE) that is gone is not put down to the variable."""
+    import imageio_ffmpeg
+
+    from testbed.lossless import ffmpeg_exe
+
+    def none():
+        raise RuntimeError("No ffmpeg exe could be found.\n  Install ffmpeg on your system.")
+
+    monkeypatch.delenv("IMAGEIO_FFMPEG_EXE", raising=False)
+    monkeypatch.setattr(imageio_ffmpeg, "get_ffmpeg_exe", none)
+    with pytest.raises(OSError) as err:
+        ffmpeg_exe()
+    assert str(err.value) == "ffmpeg: not found (No ffmpeg exe could be found. Install ffmpeg on your system.)"
+    gone = tmp_path / "binaries" / "ffmpeg-linux-x86_64"
+    monkeypatch.setattr(imageio_ffmpeg, "get_ffmpeg_exe", lambda: str(gone))
+    with pytest.raises(OSError) as err:
+        ffmpeg_exe()
+    assert str(err.value) == (f"ffmpeg: {str(gone)!r} is not an executable file; install imageio-ffmpeg's binaries "
+                              "or point IMAGEIO_FFMPEG_EXE at an ffmpeg")
+
+
+def test_ffmpeg_s_message_keeps_brackets_inside_it_and_bytes_that_are_not_utf8():
+    """Only the context at the start of a line goes: a file name in the message keeps its
+    brackets, and one in Latin-1 is no UnicodeDecodeError."""
+    import io
+
+    from testbed.lossless import _message
+
+    log = io.BytesIO(b"[in#0 @ 0x5a] Error opening input file /data/[cam @ 0x1] caf\xe9.mkv.\n")
+    assert _message(log) == "Error opening input file /data/[cam @ 0x1] caf\ufffd.mkv."
