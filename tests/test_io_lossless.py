@@ -1,7 +1,10 @@
 """testbed.lossless.read_video: one ffmpeg per video, frames and errors as before."""
 
+import os
+import re
 import subprocess
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -325,9 +328,10 @@ def test_a_video_holding_more_frames_than_expected_is_refused_after_them(tmp_pat
 
 def test_the_frame_rate_is_stored_exactly(tmp_path):
     """Frames at 7.5 Hz, not rounded to 8: 3 of them last 0.4 s (Matroska's DURATION tag);
-    at 2.4 Hz, 1.25 s."""
-    for fps, duration in ((7.5, b"00:00:00.400000000"), (2.4, b"00:00:01.250000000")):
-        data = write(tmp_path / f"{fps}.mkv", clip(3), fps).read_bytes()
+    at 2.4 Hz, 1.25 s; a rate of numpy's float32 is taken too."""
+    for i, (fps, duration) in enumerate(((7.5, b"00:00:00.400000000"), (2.4, b"00:00:01.250000000"),
+                                         (np.float32(7.5), b"00:00:00.400000000"))):
+        data = write(tmp_path / f"{i}.mkv", clip(3), fps).read_bytes()
         assert duration in data, fps
 
 
@@ -335,6 +339,9 @@ def test_a_frame_of_another_shape_is_refused_and_a_second_close_does_nothing(tmp
     w = VideoWriter(tmp_path / "v.mkv", 41, 30, 7.5)
     with pytest.raises(ValueError, match=r"^frame: expected shape \(30, 41, 3\), got \(41, 30, 3\)$"):
         w.write(np.zeros((41, 30, 3), np.uint8))
+    for shape in ((30, 41, 4), (30, 41)):
+        with pytest.raises(ValueError, match=rf"^frame: expected shape \(30, 41, 3\), got {re.escape(str(shape))}$"):
+            w.write(np.zeros(shape, np.uint8))
     w.write(clip(1)[0])
     w.close()
     w.close()
@@ -376,3 +383,112 @@ def test_an_error_after_one_frame_says_one_frame(tmp_path, monkeypatch):
     with pytest.raises(ValueError) as err:
         next(frames)
     assert str(err.value) == f"video: cannot read {str(path)!r} after 1 frame: slice CRC mismatch (truncated or corrupt)"
+
+
+def open_fds():
+    return len(os.listdir("/proc/self/fd"))
+
+
+def test_a_writer_whose_ffmpeg_stops_reading_is_ended_and_says_at_which_frame(tmp_path, monkeypatch):
+    """An ffmpeg that closed its input and hangs is killed, not waited for. (Frames larger than
+    the pipe's buffer, so that each write reaches ffmpeg at once.)"""
+    go = tmp_path / "go"
+    _fake_ffmpeg(tmp_path, monkeypatch, f"head -c {480 * 640 * 3} > /dev/null\nexec 0<&-\ntouch {go}\nexec sleep 30")
+    w = VideoWriter(tmp_path / "v.mkv", 640, 480, 7.5)
+    frames = clip(2, 480, 640)
+    w.write(frames[0])
+    while not go.exists():
+        time.sleep(0.01)
+    with pytest.raises(OSError) as err:
+        w.write(frames[1])
+    assert str(err.value) == f"cannot write {tmp_path / 'v.mkv'}: ffmpeg stopped at frame 1 (killed by signal 9: no message)"
+
+
+def test_a_writer_whose_ffmpeg_exited_says_how_it_ended(tmp_path, monkeypatch):
+    """Exit status 0 is not a signal; a small frame still buffered when ffmpeg is gone is no BrokenPipeError."""
+    _fake_ffmpeg(tmp_path, monkeypatch, "exit 0")
+    w = VideoWriter(tmp_path / "v.mkv", 640, 480, 7.5)
+    w._proc.wait()
+    with pytest.raises(OSError) as err:
+        w.write(clip(1, 480, 640)[0])
+    assert str(err.value) == f"cannot write {tmp_path / 'v.mkv'}: ffmpeg stopped at frame 0 (exit status 0: no message)"
+    _fake_ffmpeg(tmp_path, monkeypatch, "exit 3")
+    w = VideoWriter(tmp_path / "v.mkv", 2, 2, 7.5)
+    w._proc.wait()
+    w.write(clip(1, 2, 2)[0])                        # 12 bytes: held in the pipe's buffer until close
+    with pytest.raises(OSError) as err:
+        w.close()
+    assert str(err.value) == f"cannot write {tmp_path / 'v.mkv'}: ffmpeg failed after 1 frame (exit status 3: no message)"
+
+
+def test_a_full_disk_gives_ffmpeg_s_reason(tmp_path):
+    """ffmpeg's own error, not the first line of its banner."""
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full")
+    full = tmp_path / "full.mkv"
+    full.symlink_to("/dev/full")
+    with pytest.raises(OSError) as err:
+        write(full, clip(3))
+    assert re.fullmatch(rf"cannot write {re.escape(str(full))}: ffmpeg failed after 3 frames \(exit status \d+: "
+                        r"Error writing trailer: No space left on device\)", str(err.value)), str(err.value)
+
+
+def test_frames_that_are_views_or_of_another_integer_type_are_written_as_their_uint8_values(tmp_path):
+    frames = clip(3)
+    given = [frames[0][:, ::-1], frames[1][..., ::-1], frames[2].astype(np.int64)]
+    back = list(read_video(write(tmp_path / "v.mkv", given), 3))
+    for f, (a, b) in enumerate(zip(given, back, strict=True)):
+        np.testing.assert_array_equal(a, b, err_msg=f"frame {f}")
+
+
+def test_a_closed_writer_leaves_no_file_open(tmp_path, monkeypatch):
+    before = open_fds()
+    w = VideoWriter(tmp_path / "v.mkv", 41, 30, 7.5)
+    w.write(clip(1)[0])
+    w.close()
+    assert open_fds() == before
+    _fake_ffmpeg(tmp_path, monkeypatch, "cat > /dev/null\nexit 3")
+    w = VideoWriter(tmp_path / "v.mkv", 41, 30, 7.5)
+    with pytest.raises(OSError):
+        w.close()
+    assert open_fds() == before
+
+
+def test_a_close_interrupted_while_ffmpeg_finishes_kills_it(tmp_path, monkeypatch):
+    """Ctrl-C while close waits: ffmpeg (in a session of its own, so not reached by it) is ended."""
+    _fake_ffmpeg(tmp_path, monkeypatch, "exec sleep 30")
+    before = open_fds()
+    w = VideoWriter(tmp_path / "v.mkv", 41, 30, 7.5)
+    proc, real_wait = w._proc, w._proc.wait
+
+    def interrupted(*args, **kwargs):
+        proc.wait = real_wait
+        raise KeyboardInterrupt
+
+    proc.wait = interrupted
+    with pytest.raises(KeyboardInterrupt):
+        w.close()
+    assert proc.returncode == -9 and open_fds() == before
+
+
+def test_ffmpeg_runs_in_a_session_of_its_own(tmp_path, monkeypatch):
+    """Ctrl-C at the terminal reaches camtask alone, which ends its ffmpegs itself."""
+    path = write(tmp_path / "v.mkv", clip(5, 128, 128))     # more than a pipe holds: the reader's ffmpeg waits
+    procs = []
+    real = subprocess.Popen
+
+    def popen(cmd, *args, **kwargs):
+        procs.append(real(cmd, *args, **kwargs))
+        return procs[-1]
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
+    w = VideoWriter(tmp_path / "w.mkv", 41, 30, 7.5)
+    frames = read_video(path, 5)
+    next(frames)
+    try:
+        assert len(procs) == 2 and all(os.getsid(p.pid) == p.pid != os.getsid(0) for p in procs)
+    finally:
+        frames.close()
+        w.write(clip(1)[0])
+        w.close()
+
