@@ -60,6 +60,8 @@ def test_another_frame_count_is_refused_after_the_frames(tmp_path):
     assert len(got) == 2
     with pytest.raises(ValueError, match=r"v1.mkv' holds 1 frame; expected 2$"):   # said "1 frames"
         list(read_video(write(tmp_path / "v1.mkv", clip(1)), 2))
+    with pytest.raises(ValueError, match=r"v1.mkv' holds 1 frame; expected 0$"):
+        list(read_video(tmp_path / "v1.mkv", 0))
 
 
 def test_not_a_video_names_the_file_and_ffmpeg_s_reason(tmp_path):
@@ -89,7 +91,7 @@ def test_a_closed_reader_stops_its_ffmpeg(tmp_path, monkeypatch):
     for p in procs:
         p.kill()                              # (lets a hung close return)
     closing.join()
-    assert not hung and procs and all(p.returncode is not None for p in procs)
+    assert not hung and procs and all(p.returncode is not None and p.stdout.closed for p in procs)
 
 
 def test_errors_give_ffmpeg_s_reason_without_its_pointer_addresses(tmp_path):
@@ -492,3 +494,69 @@ def test_ffmpeg_runs_in_a_session_of_its_own(tmp_path, monkeypatch):
         w.write(clip(1)[0])
         w.close()
 
+
+def test_a_missing_video_or_a_folder_is_named_before_ffmpeg_starts(tmp_path, monkeypatch):
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: pytest.fail("ffmpeg started"))
+    with pytest.raises(FileNotFoundError, match=r"^frames/cam01: no such file '.*v.mkv'$"):
+        next(read_video(tmp_path / "v.mkv", name="frames/cam01"))
+    with pytest.raises(ValueError, match=r"^video: '.*' is a folder, not a file$"):
+        next(read_video(tmp_path))
+
+
+def test_the_first_video_stream_is_read(tmp_path):
+    """Of a file of two video streams, the first; not the one ffmpeg picks unless told (the
+    default one, here the second)."""
+    from testbed.lossless import ffmpeg_exe
+
+    small, large = clip(2, 30, 41, seed=1), clip(2, 48, 64, seed=2)
+    a, b, both = write(tmp_path / "a.mkv", small), write(tmp_path / "b.mkv", large), tmp_path / "both.mkv"
+    subprocess.run([ffmpeg_exe(), "-v", "error", "-i", str(a), "-i", str(b), "-map", "0", "-map", "1", "-c", "copy",
+                    "-disposition:v:0", "0", "-disposition:v:1", "default", str(both)], check=True)
+    back = list(read_video(both, 2))
+    for f, (want, got) in enumerate(zip(small, back, strict=True)):
+        np.testing.assert_array_equal(want, got, err_msg=f"frame {f}")
+
+
+@pytest.mark.parametrize("out", [r"P5\n2 2\n255\n", r"P6\n2 2\n65535\n", r"P6\n0 0\n255\n", r"P6\n-2 2\n255\n",
+                                 r"P6\nx\n255\n"])
+def test_output_that_is_no_rgb_frame_is_never_yielded_and_is_read_to_its_end(tmp_path, monkeypatch, out):
+    """Not 8-bit RGB, no size or a size of no pixels: no frame; the rest of ffmpeg's output is
+    read (ffmpeg waiting to write it would never end)."""
+    path = write(tmp_path / "v.mkv", clip(1))
+    _fake_ffmpeg(tmp_path, monkeypatch, f"printf '{out}'\n"
+                                        "timeout 10 head -c 200000 /dev/zero || { echo 'output not read' >&2; exit 1; }")
+    got = []
+    with pytest.raises(ValueError) as err:
+        got.extend(read_video(path))
+    assert got == [] and str(err.value) == f"video: {str(path)!r}: frame 0 ends early"
+
+
+def test_a_corrupt_frame_early_in_a_long_video_ends_ffmpeg(tmp_path, monkeypatch):
+    """ffmpeg goes on decoding after a slice's CRC error: the reader stops it, not waits for
+    frames it will not take (more than a pipe holds)."""
+    data = bytearray(write(tmp_path / "v.mkv", clip(8, 128, 128)).read_bytes())
+    data[len(data) // 10] ^= 0xFF
+    bad = tmp_path / "bad.mkv"
+    bad.write_bytes(bytes(data))
+    procs, errors = [], []
+    real = subprocess.Popen
+
+    def popen(cmd, *args, **kwargs):
+        procs.append(real(cmd, *args, **kwargs))
+        return procs[-1]
+
+    def read():
+        try:
+            list(read_video(bad))
+        except ValueError as exc:
+            errors.append(str(exc))
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
+    reading = threading.Thread(target=read)
+    reading.start()
+    reading.join(10)
+    hung = reading.is_alive()
+    for p in procs:
+        p.kill()                              # (lets a hung reader return)
+    reading.join()
+    assert not hung and len(errors) == 1 and "bad.mkv" in errors[0] and "CRC" in errors[0], errors
