@@ -399,7 +399,9 @@ def test_a_writer_whose_ffmpeg_stops_reading_is_ended_and_says_at_which_frame(tm
     w = VideoWriter(tmp_path / "v.mkv", 640, 480, 7.5)
     frames = clip(2, 480, 640)
     w.write(frames[0])
+    deadline = time.monotonic() + 30
     while not go.exists():
+        assert time.monotonic() < deadline, "the fake ffmpeg never read the first frame"
         time.sleep(0.01)
     with pytest.raises(OSError) as err:
         w.write(frames[1])
