@@ -146,7 +146,8 @@ def test_an_unreachable_scheduler_says_why():
 
 @pytest.mark.skipif(shutil.which("openssl") is None, reason="needs openssl for a self-signed certificate")
 def test_a_tls_scheduler_set_up_in_the_dask_config_passes_the_check(tmp_path):
-    """The check connects as Client does, with the Dask config's TLS settings."""
+    """The check connects as Client does, with the Dask config's TLS settings for a client
+    (the scheduler's own are given to it, not set in the config)."""
     import subprocess
 
     import dask
@@ -158,11 +159,12 @@ def test_a_tls_scheduler_set_up_in_the_dask_config_passes_the_check(tmp_path):
     cert, key = tmp_path / "cert.pem", tmp_path / "key.pem"
     subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=localhost", "-days", "1",
                     "-keyout", str(key), "-out", str(cert)], check=True, capture_output=True)
-    tls = {"distributed.comm.tls.ca-file": str(cert), "distributed.comm.require-encryption": True} | {
-        f"distributed.comm.tls.{who}.{part}": str(path) for who in ("scheduler", "client", "worker")
-        for part, path in (("cert", cert), ("key", key))}
+    tls = {"distributed.comm.tls.ca-file": str(cert), "distributed.comm.require-encryption": True,
+           "distributed.comm.tls.client.cert": str(cert), "distributed.comm.tls.client.key": str(key)}
+    scheduler = Security(tls_ca_file=str(cert), require_encryption=True, tls_scheduler_cert=str(cert),
+                         tls_scheduler_key=str(key), tls_client_cert=str(cert), tls_client_key=str(key))
     with dask.config.set(tls), LocalCluster(n_workers=0, processes=False, protocol="tls", dashboard_address=None,
-                                            security=Security()) as cluster:
+                                            security=scheduler) as cluster:
         assert cluster.scheduler_address.startswith("tls://")
         check_scheduler(cluster.scheduler_address, 5.0)        # raises unless it answered as a scheduler
 
