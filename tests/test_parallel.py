@@ -73,6 +73,70 @@ def test_ctrl_c_while_a_local_cluster_starts_waits_for_it_then_closes_it(monkeyp
     assert events == ["started", "client", "client closed", "cluster closed"]
 
 
+def test_sigterm_while_a_local_cluster_starts_waits_for_it_then_closes_it(monkeypatch):
+    """As Ctrl-C: a batch scheduler's SIGTERM is held until the cluster has started."""
+    import signal
+
+    import distributed
+
+    events = []
+
+    class Terminated(Exception):
+        pass
+
+    def terminated(signum, frame):
+        raise Terminated
+
+    class Cluster:
+        def __init__(self, **kwargs):
+            os.kill(os.getpid(), signal.SIGTERM)
+            events.append("started")
+
+        def close(self):
+            events.append("cluster closed")
+
+    class Client:
+        def __init__(self, cluster):
+            events.append("client")
+
+        def close(self):
+            events.append("client closed")
+
+    monkeypatch.setattr(distributed, "LocalCluster", Cluster)
+    monkeypatch.setattr(distributed, "Client", Client)
+    before = signal.signal(signal.SIGTERM, terminated)
+    try:
+        with pytest.raises(Terminated), open_client(2):
+            events.append("body")
+    finally:
+        signal.signal(signal.SIGTERM, before)
+    assert events == ["started", "client", "client closed", "cluster closed"]
+
+
+def test_a_local_clusters_warnings_as_it_starts_are_not_shown(monkeypatch):
+    """Only those: the process's own warnings are shown afterwards."""
+    import warnings
+
+    import distributed
+
+    events = []
+    _fake_cluster(monkeypatch, events)
+    started = distributed.LocalCluster
+
+    def cluster(**kwargs):
+        warnings.warn("Port 8787 is already in use.", UserWarning, stacklevel=1)
+        return started(**kwargs)
+
+    monkeypatch.setattr(distributed, "LocalCluster", cluster)
+    with warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        with open_client(1):
+            pass
+        warnings.warn("this process's own", UserWarning, stacklevel=1)     # shown as before
+    assert [str(w.message) for w in shown] == ["this process's own"]
+    assert events == [("cluster", 1), "client closed", "cluster closed"]
+
+
 @pytest.mark.parametrize(("answer", "message"), [
     (None, "cannot reach a Dask scheduler at tcp://127.0.0.1:{port} (no answer within 1 s)"),
     (b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n", "tcp://127.0.0.1:{port} is not a Dask scheduler"),
