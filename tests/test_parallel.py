@@ -387,6 +387,14 @@ def test_chunk_and_default_workers():
     assert default_workers() == len(os.sched_getaffinity(0))
 
 
+def test_default_workers_are_the_cores_this_process_may_use(monkeypatch):
+    """Not all the machine's: taskset or a batch scheduler may give it fewer."""
+    from testbed.parallel import default_workers
+
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 5, 7})
+    assert default_workers() == 3
+
+
 def _no_cluster(monkeypatch):
     import distributed
 
