@@ -180,6 +180,9 @@ def test_a_port_out_of_range_is_a_bad_address_not_an_unreachable_one():
     with pytest.raises(ValueError) as info:
         check_scheduler("tcp://127.0.0.1:99999", 1.0)
     assert str(info.value) == "scheduler: cannot use the address tcp://127.0.0.1:99999 (port 99999 is not in 1..65535)"
+    with pytest.raises(ValueError) as info:             # one past the last port: port 0
+        check_scheduler("tcp://127.0.0.1:65536", 1.0)
+    assert str(info.value) == "scheduler: cannot use the address tcp://127.0.0.1:65536 (port 65536 is not in 1..65535)"
 
 
 def test_an_unreachable_scheduler_says_why():
@@ -429,7 +432,7 @@ def test_a_client_that_cannot_connect_after_the_check_is_one_line(monkeypatch):
     monkeypatch.setattr(parallel, "check_scheduler", lambda address, timeout: checked.append((address, timeout)))
     for exc, why in [(OSError("Timed out trying to connect to tcp://10.0.0.5:8786 after 2 s\nmore"),
                       "Timed out trying to connect to tcp://10.0.0.5:8786 after 2 s"),
-                     (TimeoutError(), "TimeoutError")]:
+                     (TimeoutError(), "TimeoutError"), (ValueError("bad\nmore"), "bad")]:
         def client(address, timeout, exc=exc):
             assert (address, timeout) == ("tcp://10.0.0.5:8786", "2.0s")
             raise exc
@@ -438,7 +441,7 @@ def test_a_client_that_cannot_connect_after_the_check_is_one_line(monkeypatch):
         with pytest.raises(ValueError) as info, open_client(scheduler="10.0.0.5:8786", connect_timeout=2.0):
             pass
         assert str(info.value) == f"scheduler: cannot reach a Dask scheduler at tcp://10.0.0.5:8786 ({why})"
-    assert checked == [("tcp://10.0.0.5:8786", 2.0)] * 2
+    assert checked == [("tcp://10.0.0.5:8786", 2.0)] * 3
 
 
 def test_a_scheduler_client_silences_dask_logs_while_open_and_is_closed(monkeypatch):
@@ -537,7 +540,7 @@ def test_an_address_dask_cannot_connect_to_says_why_without_a_wait():
 
 
 
-@pytest.mark.parametrize("address", ["inproc://x", "inproc://"])
+@pytest.mark.parametrize("address", ["inproc://x", "inproc://", "inproc://h/1/2/3"])
 def test_a_malformed_inproc_address_names_the_form_it_takes(address):
     """Dask's words were "not enough values to unpack (expected 3, got 1)"."""
     from testbed.parallel import check_scheduler
@@ -596,6 +599,44 @@ def test_what_a_server_answers_decides_if_it_is_a_dask_scheduler(monkeypatch, re
                                    else f"scheduler: {address} is not a Dask scheduler ({why})")
     assert seen == [(address, 2.5)]
     assert log == ([] if reply is None else [{"op": "identity", "reply": True}, "aborted"])
+
+
+def test_a_server_that_answers_after_the_timeout_gives_no_answer(monkeypatch):
+    import asyncio
+
+    import distributed.comm
+
+    from testbed.parallel import check_scheduler
+
+    class Late(_Comm):
+        async def read(self):
+            await asyncio.sleep(0.3)
+            return self.reply
+
+    log = []
+
+    async def connect(address, timeout, **kwargs):
+        return Late({"type": "Scheduler", "id": "s"}, log)
+
+    monkeypatch.setattr(distributed.comm, "connect", connect)
+    with pytest.raises(ValueError) as info:
+        check_scheduler("inproc://h/1/2", 0.2)
+    assert str(info.value) == "scheduler: cannot reach a Dask scheduler at inproc://h/1/2 (no answer within 0.2 s)"
+    assert log == [{"op": "identity", "reply": True}, "aborted"]
+
+
+def test_an_address_dask_refuses_in_several_lines_is_one_line(monkeypatch):
+    import distributed.comm
+
+    from testbed.parallel import check_scheduler
+
+    async def connect(address, timeout, **kwargs):
+        raise ValueError("unknown address\nmore about it")
+
+    monkeypatch.setattr(distributed.comm, "connect", connect)
+    with pytest.raises(ValueError) as info:
+        check_scheduler("tcp://127.0.0.1:8786", 1.0)
+    assert str(info.value) == "scheduler: cannot use the address tcp://127.0.0.1:8786 (unknown address)"
 
 
 def test_only_tcp_based_addresses_are_tried_with_a_socket():
