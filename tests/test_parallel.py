@@ -647,6 +647,8 @@ def test_only_tcp_based_addresses_are_tried_with_a_socket():
     assert _host_port("tcp://10.0.0.5:8786") == ("10.0.0.5", 8786)
     assert _host_port("wss://[::1]:443") == ("::1", 443)
     assert _host_port("ucx://10.0.0.5:8786") is None
+    with pytest.raises(ValueError, match="^missing port number in address '10.0.0.5'$"):
+        _host_port("tcp://10.0.0.5")                # Dask's words, not tried without a port
     address = new_address()                         # of this process, nothing listens there
     assert _host_port(address) is None and _why_unreachable(address) is None
     with pytest.raises(ValueError) as info:
