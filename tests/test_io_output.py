@@ -228,3 +228,77 @@ def test_figures_are_saved_at_the_dpi_given(tmp_path):
 
     save_figure(plt.figure(figsize=(2, 1)), tmp_path / "f.png", dpi=40)
     assert cv2.imread(str(tmp_path / "f.png")).shape[:2] == (40, 80)
+
+
+def test_the_reasons_a_folder_is_refused_are_the_systems_words_alone(tmp_path):
+    """No errno, no path twice, and no OSError chained below the one line."""
+    from testbed.output import check_writable
+
+    with pytest.raises(ValueError, match=r"^--out: cannot write to /proc \([A-Z][a-z ]+\)$") as err:
+        check_writable("--out", "/proc")
+    assert err.value.__suppress_context__
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(ValueError, match=r"^OUT: cannot make the folder .*afile/sub \(Not a directory\)$") as err, \
+            made_folder("OUT", tmp_path / "afile" / "sub"):
+        pass
+    assert err.value.__suppress_context__
+
+
+def test_an_output_through_a_link_to_a_file_of_a_dataset_is_refused(tmp_path):
+    """A link is written through (its target replaced), so where it leads is what counts."""
+    ds = _dataset(tmp_path / "ds", json.dumps({"format_version": 2, "episodes": []}))
+    (tmp_path / "m.json").symlink_to(ds / "manifest.json")
+    with pytest.raises(ValueError, match=r"^--out: .*m.json is in the dataset .*ds, beside its manifest.json"):
+        check_output_file("--out", tmp_path / "m.json")
+    (tmp_path / "x.npz").symlink_to(ds / "episode_0000" / "x.npz")          # dangling: x.npz is not made yet
+    with pytest.raises(ValueError, match=r"^--out: .*/x.npz is inside .*episode_0000, an episode of the dataset"):
+        check_output_file("--out", tmp_path / "x.npz")
+    assert sorted(os.listdir(tmp_path)) == ["ds", "m.json", "x.npz"] and os.listdir(ds / "episode_0000") == []
+
+
+def test_the_episode_of_a_dataset_inside_an_episode_is_the_nearest(tmp_path):
+    from testbed.output import episode_of
+
+    outer = _dataset(tmp_path / "ds", "{}") / "episode_0000"
+    inner = _dataset(outer / "copy", "{}") / "episode_0000"
+    assert episode_of(inner / "x.png") == inner and episode_of(outer / "x.png") == outer
+
+
+def test_beside_a_damaged_manifest_only_episode_folders_make_a_dataset(tmp_path):
+    """A file named episode_* is no episode; a folder of a five-digit episode is."""
+    from testbed.output import check_outside_dataset
+
+    (tmp_path / "manifest.json").write_text("{not json")
+    (tmp_path / "episode_notes.txt").write_text("x")
+    check_outside_dataset("--out", tmp_path / "x.png")
+    (tmp_path / "episode_12345").mkdir()
+    with pytest.raises(ValueError, match=r"^--out: .*x.png is in the dataset "):
+        check_outside_dataset("--out", tmp_path / "x.png")
+
+
+def test_a_figure_is_png_whatever_format_matplotlib_saves_by_default():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from testbed.output import figure_png
+
+    with matplotlib.rc_context({"savefig.format": "pdf"}):
+        png = figure_png(plt.figure(figsize=(1, 1)))
+    assert png.startswith(b"\x89PNG\r\n\x1a\n")
+
+
+def test_a_figure_that_cannot_be_drawn_is_closed_all_the_same(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from testbed.output import save_figure
+
+    fig = plt.figure(figsize=(1, 1))
+    fig.text(0.5, 0.5, r"$\nosuchsymbol$")                  # mathtext fails as the figure is drawn
+    with pytest.raises(ValueError, match="nosuchsymbol"):
+        save_figure(fig, tmp_path / "f.png")
+    assert not plt.fignum_exists(fig.number) and os.listdir(tmp_path) == []
