@@ -108,3 +108,43 @@ def test_files_get_the_permissions_the_umask_gives(tmp_path):
     finally:
         os.umask(old)
     assert stat.S_IMODE((tmp_path / "a.png").stat().st_mode) == 0o664
+
+
+@pytest.mark.parametrize("bad", [np.zeros((4, 4, 3), np.uint16), np.zeros((4, 4), np.int16),
+                                 np.zeros((4, 4), np.uint32), np.zeros((4, 4), bool)])
+def test_other_sample_types_are_refused_not_reinterpreted(bad):
+    with pytest.raises(ValueError, match=rf"^image: expected .*, got \(4, 4.*\) {bad.dtype}$"):
+        encode_png(bad)
+
+
+def test_rgb_pngs_are_fpngs():
+    """Colour goes through fpng (the fast path), not the grey images' SUB filter."""
+    import fpng
+
+    img = np.random.default_rng(4).integers(0, 256, (12, 20, 3), dtype=np.uint8)
+    assert encode_png(img) == fpng.from_ndarray(img)
+
+
+def test_strided_images_are_written_as_their_pixels():
+    rng = np.random.default_rng(5)
+    rgb = rng.integers(0, 256, (9, 14, 3), dtype=np.uint8)
+    grey = rng.integers(0, 65536, (9, 14), dtype=np.uint16)
+    for img in (rgb[:, ::2], rgb[..., ::-1], rgb.transpose(1, 0, 2), grey[::2, ::3], grey.T,
+                grey.astype(np.uint8)[:, ::-1]):
+        back = cv2.imdecode(np.frombuffer(encode_png(img), np.uint8), cv2.IMREAD_UNCHANGED)
+        assert np.array_equal(back[..., ::-1] if img.ndim == 3 else back, img)
+
+
+def test_a_flat_label_image_is_compressed():
+    """One label over 640 x 480 pixels: a few hundred bytes, not the 300 KB of its samples."""
+    assert len(encode_png(np.full((480, 640), 3, np.uint8))) < 3000
+
+
+def test_a_failed_write_is_one_line_with_the_systems_reason_and_closes_the_file():
+    from testbed.png import write_file
+
+    before = len(os.listdir("/proc/self/fd"))
+    with pytest.raises(OSError, match=r"^cannot write /dev/full: No space left on device$") as err:
+        write_file("/dev/full", b"x" * 10)
+    assert err.value.__suppress_context__
+    assert len(os.listdir("/proc/self/fd")) == before
