@@ -143,6 +143,8 @@ def test_a_flat_label_image_is_compressed():
 def test_a_failed_write_is_one_line_with_the_systems_reason_and_closes_the_file():
     from testbed.png import write_file
 
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full")
     before = len(os.listdir("/proc/self/fd"))
     with pytest.raises(OSError, match=r"^cannot write /dev/full: No space left on device$") as err:
         write_file("/dev/full", b"x" * 10)
