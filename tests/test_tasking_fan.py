@@ -292,3 +292,29 @@ def test_union_areas_of_cones_an_ulp_or_two_wide_are_zero():
             t1 = t0 + rng.integers(1, 3, n) * np.spacing(np.abs(t0))
             got = UnionAreas(ring, (np.arange(n), apex, t0, t1), n, 20.0)(np.eye(n, dtype=bool))
             assert np.abs(got).max() < 1e-9 * room.area
+
+
+def test_split_wide_halves_intervals_wider_than_pi():
+    # camera 1's 4.5-rad interval becomes two 2.25-rad halves, both on its apex; a
+    # half-plane (pi) and narrower intervals are left as they are
+    apex = np.array([[0.0, 0.0], [1.0, 2.0], [1.0, 2.0], [3.0, 0.0]])
+    cam, apx, t0, t1 = split_wide(np.array([0, 1, 1, 2]), apex, np.array([0.0, 0.0, 4.6, 1.0]),
+                                  np.array([3.0, 4.5, 5.0, 1.0 + np.pi]))
+    assert cam.tolist() == [0, 1, 1, 1, 2]
+    np.testing.assert_array_equal(apx, apex[[0, 1, 1, 2, 3]])
+    np.testing.assert_allclose(t0, [0.0, 0.0, 2.25, 4.6, 1.0], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(t1, [3.0, 2.25, 4.5, 5.0, 1.0 + np.pi], rtol=0, atol=1e-15)
+
+
+def test_cone_areas_of_a_polygon_with_more_edges_than_a_block(monkeypatch):
+    # a block holds fewer (cone, edge) pairs than the polygon has edges: one cone per block
+    from tasking import fan
+
+    poly = Point(0.2, -0.1).buffer(1.0, quad_segs=4)  # 16 edges
+    apex = np.array([[0.0, 0.0], [1.5, 0.0], [-0.5, -1.5]])
+    t0 = np.array([0.3, 2.0, 0.5])
+    t1 = t0 + np.array([2.0, 2.5, 1.5])
+    monkeypatch.setattr(fan, "BLOCK", 8)
+    got = cone_areas(*ring_edges(poly), apex, t0, t1)
+    want = [poly.intersection(w).area for w in wedge_polygons(apex, t0, t1, 20.0)]
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12)
