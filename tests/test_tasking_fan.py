@@ -318,3 +318,19 @@ def test_cone_areas_of_a_polygon_with_more_edges_than_a_block(monkeypatch):
     got = cone_areas(*ring_edges(poly), apex, t0, t1)
     want = [poly.intersection(w).area for w in wedge_polygons(apex, t0, t1, 20.0)]
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12)
+
+
+def test_convex_ring_refuses_what_is_not_one_convex_polygon():
+    from shapely.geometry import MultiPolygon
+
+    from tasking.fan import convex_ring
+
+    assert convex_ring(Polygon()) is None
+    # two boxes side by side: their rings, one after the other, turn one way throughout
+    assert convex_ring(MultiPolygon([box(0, 0, 1, 1), box(2, 0, 3, 1)])) is None
+    assert convex_ring(box(0, 0, 1, 1).exterior) is None
+    # a dent at the ring's first vertex (the turn between its last and first edges)
+    assert convex_ring(Polygon([(0.5, 0.1), (1, 0), (1, 1), (0, 1), (0, 0)])) is None
+    # a dent of 1e-7 m in a 1 m square: 5e-8 m^2, 50 times the areas' accuracy (1e-9 of
+    # the room's area)
+    assert convex_ring(Polygon([(0, 0), (1, 0), (1, 1), (0.5, 1 - 1e-7), (0, 1)])) is None
