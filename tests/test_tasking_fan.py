@@ -334,3 +334,22 @@ def test_convex_ring_refuses_what_is_not_one_convex_polygon():
     # a dent of 1e-7 m in a 1 m square: 5e-8 m^2, 50 times the areas' accuracy (1e-9 of
     # the room's area)
     assert convex_ring(Polygon([(0, 0), (1, 0), (1, 1), (0.5, 1 - 1e-7), (0, 1)])) is None
+
+
+@pytest.mark.parametrize("rot", [0.0, 0.0730470885143677, 0.5, 1.3, 2.9, 4.4])
+@pytest.mark.parametrize("order", [(0, 1), (1, 0)])
+def test_union_areas_count_a_theta0_and_a_theta1_ray_along_one_segment_once(rot, order):
+    # camera A at (0, 0) sees [0, pi/2], B at (1, 0) sees [pi/2, pi] (box and cameras
+    # turned by rot): A's theta0 ray and B's theta1 ray share the segment from A to B, both
+    # cones above it; the union is the room's upper part, 5 x 2, whichever camera is lower
+    from shapely import affinity
+
+    from tasking.fan import UnionAreas, convex_ring
+
+    c, s = np.cos(rot), np.sin(rot)
+    room = affinity.rotate(box(-2, -1, 3, 2), rot, origin=(0, 0), use_radians=True)
+    apex = np.array([[0.0, 0.0], [c, s]])
+    cones = (np.array(order), apex, np.array([0.0, np.pi / 2]) + rot,
+             np.array([np.pi / 2, np.pi]) + rot)
+    got = UnionAreas(convex_ring(room), cones, 2, 20.0)(np.array([[1, 0], [0, 1], [1, 1]], bool))
+    np.testing.assert_allclose(got, [6.0, 6.0, 10.0], rtol=0, atol=1e-9)
