@@ -353,3 +353,12 @@ def test_union_areas_count_a_theta0_and_a_theta1_ray_along_one_segment_once(rot,
              np.array([np.pi / 2, np.pi]) + rot)
     got = UnionAreas(convex_ring(room), cones, 2, 20.0)(np.array([[1, 0], [0, 1], [1, 1]], bool))
     np.testing.assert_allclose(got, [6.0, 6.0, 10.0], rtol=0, atol=1e-9)
+
+
+def test_union_areas_of_one_set_given_as_a_flat_row():
+    from tasking.fan import UnionAreas, convex_ring
+
+    cones = (np.array([0, 1]), np.array([[0.0, 0.0], [2.0, 0.0]]),
+             np.array([0.0, np.pi / 2]), np.array([np.pi / 4, np.pi]))
+    ua = UnionAreas(convex_ring(box(0, 0, 2, 2)), cones, 2, 10.0)
+    np.testing.assert_allclose(ua([True, False]), [2.0], rtol=0, atol=1e-9)
