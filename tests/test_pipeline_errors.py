@@ -191,6 +191,40 @@ def test_replace_is_a_validated_copy():
         p.replace(kernel=3)
 
 
+@pytest.mark.parametrize("name", ["opening_kernel", "spatial_kernel", "median_kernel"])
+def test_a_float_is_not_a_filter_size(name):
+    """3.0 and 5.5 are odd-looking numbers in range, but a filter is a whole number of pixels."""
+    for value in (3.0, 5.5, np.float64(7.0)):
+        with pytest.raises(ValueError) as err:
+            PipelineParams(**{name: value})
+        assert str(err.value) == f"{name}: expected an odd integer in 1..8191, got {value!r}"
+
+
+def test_writing_parameters_replaces_the_file_whole(tmp_path):
+    """A reader of the old file (a run that opened it) keeps reading the old parameters: the
+    new file is put in its place, the old one is not truncated and rewritten."""
+    path = tmp_path / "p.yaml"
+    PipelineParams(median_kernel=5).to_yaml(path)
+    with open(path) as old:
+        PipelineParams(median_kernel=9).to_yaml(path)
+        assert "median_kernel: 5" in old.read()
+    assert load_params(path).median_kernel == 9
+
+
+def test_the_params_option_is_named_when_given_and_the_default_file_when_not():
+    from pipeline.params import params_option
+
+    assert params_option("p.yaml") == params_option(DEFAULT_PATH) == "--params"
+    assert params_option("") == "--params"                  # --params "" was given (an unset variable)
+    assert params_option(None) == "--params (not given: the default assets/pipeline/default.yaml)"
+
+
+def test_an_empty_params_path_is_not_the_defaults():
+    """``--params "$P"`` with P unset is a mistake to report, not a run on the default file."""
+    with pytest.raises(ValueError, match="^--params: "):
+        load_params("", "--params")
+
+
 @pytest.mark.parametrize("frames, match", [
     (np.zeros((1, 24, 31, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\) to match the calibration"),
     (np.zeros((2, 24, 32, 3), np.uint8), r"frames: expected shape \(1, 24, 32, 3\)"),
