@@ -24,7 +24,7 @@ from typing import Any
 import yaml
 
 from scene import yamlio
-from scene.checks import check_mapping, check_positive, read_input_text
+from scene.checks import check_mapping, check_positive, read_input_text, shown
 
 from .files import write_atomic
 
@@ -40,7 +40,7 @@ def check_odd_kernel(name: str, value: Any) -> int:
     integers too), else raise naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not 1 <= value <= MAX_KERNEL \
             or value % 2 == 0:
-        raise ValueError(f"{name}: expected an odd integer in 1..{MAX_KERNEL}, got {value!r}")
+        raise ValueError(f"{name}: expected an odd integer in 1..{MAX_KERNEL}, got {shown(value)}")
     return int(value)
 
 
@@ -51,7 +51,7 @@ def check_range(name: str, value: Any, low: float, high: float, *, low_open=Fals
     x = check_positive(name, value, allow_zero=True) if low >= 0 else float(value)
     if (x < low or (low_open and x == low)) or (x > high or (high_open and x == high)):
         lo, hi = ("(" if low_open else "["), (")" if high_open else "]")
-        raise ValueError(f"{name}: expected a number in {lo}{low:g}, {high:g}{hi}, got {value!r}")
+        raise ValueError(f"{name}: expected a number in {lo}{low:g}, {high:g}{hi}, got {shown(value)}")
     return x
 
 

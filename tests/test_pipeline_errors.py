@@ -191,6 +191,17 @@ def test_replace_is_a_validated_copy():
         p.replace(kernel=3)
 
 
+def test_a_huge_integer_is_named_in_six_digits():
+    """An integer of 5000 digits stopped Python's repr (its 4300-digit limit) with an error
+    that named no parameter; one of 21 digits was shown whole."""
+    with pytest.raises(ValueError) as err:
+        PipelineParams(opening_kernel=10**5000)
+    assert str(err.value) == "opening_kernel: expected an odd integer in 1..8191, got 1e+5000"
+    with pytest.raises(ValueError) as err:
+        PipelineParams(dark_delta=10**20)
+    assert str(err.value) == "dark_delta: expected a number in [0, 442], got 1e+20"
+
+
 @pytest.mark.parametrize("name", ["opening_kernel", "spatial_kernel", "median_kernel"])
 def test_a_float_is_not_a_filter_size(name):
     """3.0 and 5.5 are odd-looking numbers in range, but a filter is a whole number of pixels."""
