@@ -55,3 +55,12 @@ def test_optimal_subset_is_the_first_best_subset_by_hand(n, cells, data, chunk, 
     subsets = np.array(list(combinations(range(n), k)))
     hand = [sum(a for m, a in zip(masks, areas, strict=True) if not m[s].any()) for s in subsets]
     np.testing.assert_array_equal(subset_areas(cov, subsets), hand)
+
+
+def test_subset_areas_take_camera_indices_held_as_floats():
+    """NumPy's default dtype is float: np.zeros((0, 2)) is no subset, and [[0.0, 2.0]] is
+    cameras 0 and 2."""
+    masks = np.array([[True, False, False], [False, True, False], [False, False, True]])
+    cov = Coverage(masks, np.array([1.0, 2.0, 4.0]))
+    np.testing.assert_array_equal(subset_areas(cov, np.array([[0.0, 2.0], [1.0, 2.0]])), [2.0, 1.0])
+    assert subset_areas(cov, np.zeros((0, 2))).shape == (0,)
