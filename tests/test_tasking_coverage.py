@@ -64,3 +64,10 @@ def test_subset_areas_take_camera_indices_held_as_floats():
     cov = Coverage(masks, np.array([1.0, 2.0, 4.0]))
     np.testing.assert_array_equal(subset_areas(cov, np.array([[0.0, 2.0], [1.0, 2.0]])), [2.0, 1.0])
     assert subset_areas(cov, np.zeros((0, 2))).shape == (0,)
+
+
+def test_optimal_subset_without_a_tolerance_takes_the_strictly_smallest_hull():
+    """Camera 1's hull is 1e-12 m^2 smaller than camera 0's: no tolerance, no tie."""
+    cov = Coverage(np.array([[True, False], [False, True]]), np.array([1.0, 1.0 + 1e-12]))
+    assert optimal_subset(cov, 1) == [1]
+    assert optimal_subset(cov, 1, tol=1e-9) == [0]
