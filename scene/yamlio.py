@@ -38,6 +38,18 @@ class Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
                 seen.add(key)
         return super().construct_mapping(node, deep)
 
+    def construct_yaml_int(self, node):
+        """An integer, or a YAML error where it is for one too long for Python to read (more
+        than ``sys.get_int_max_str_digits()`` digits: its ValueError named no file or line)."""
+        try:
+            return super().construct_yaml_int(node)
+        except ValueError:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"an integer of {len(node.value)} characters is too long to read",
+                node.start_mark) from None
+
+
+Loader.add_constructor("tag:yaml.org,2002:int", Loader.construct_yaml_int)
 
 Loader.add_implicit_resolver(
     "tag:yaml.org,2002:float",

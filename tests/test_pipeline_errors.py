@@ -179,6 +179,14 @@ def test_a_file_that_is_not_yaml_is_named_with_the_option(tmp_path):
                               "']' at line 2, column 1)")
 
 
+def test_a_file_with_an_integer_too_long_to_read_is_named_with_the_option(tmp_path):
+    (tmp_path / "p.yaml").write_text("opening_kernel: " + "1" * 5000 + "\n")
+    with pytest.raises(ValueError) as err:
+        load_params(tmp_path / "p.yaml", name="--params")
+    assert str(err.value) == (f"--params: {tmp_path / 'p.yaml'} is not valid YAML (an integer of 5000 characters "
+                              "is too long to read at line 1, column 17)")
+
+
 def test_replace_is_a_validated_copy():
     p = PipelineParams(threshold_deg=5.0)
     q = p.replace(median_kernel=3, column_threshold=7)

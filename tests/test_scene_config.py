@@ -332,6 +332,18 @@ def test_duplicate_keys_are_refused_not_overridden():
         Scene.from_text(LAB.replace("  count: 3\n", "  count: 3\n  count: 20\n"), "s.yaml")
 
 
+def test_an_integer_too_long_for_python_to_read_is_a_yaml_error_with_its_place():
+    """Python reads at most 4300 digits: its own ValueError named neither the file nor the line.
+    Integers of other forms read as before."""
+    with pytest.raises(ValueError) as err:
+        Scene.from_text(LAB.replace("count: 3", "count: " + "1" * 5000), "s.yaml")
+    assert str(err.value) == "s.yaml: not valid YAML (an integer of 5000 characters is too long to read at line 42, column 10)"
+    from scene import yamlio
+
+    assert yamlio.load("a: 12\nb: 0x1f\nc: 1_000\nd: -7\ne: " + "9" * 4300) == {
+        "a": 12, "b": 31, "c": 1000, "d": -7, "e": int("9" * 4300)}
+
+
 def test_merge_keys_may_still_be_overridden():
     text = LAB.replace("    - {number: 1,", "    - &c1 {number: 1,").replace(
         "    - {number: 2, position: [2.343, 0.05, 2.2], yaw_deg: 70.5, pitch_deg: 15.0}",
