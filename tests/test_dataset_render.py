@@ -1031,7 +1031,7 @@ def test_the_order_of_the_cameras_given_does_not_matter(dataset, tmp_path):
 
 
 def test_no_more_worker_processes_than_episodes(tmp_path):
-    # one episode runs in this process (--help: "0 or a single one = in this process")
+    # one episode runs in this process (--help: "0, or a single episode to render, runs in this process")
     out = tmp_path / "data"
     assert main(["render", "lab", "--frames", "1", "--cameras", "2", "--workers", "6", "--out", str(out)]) == 0
     assert json.loads((out / "run_info.json").read_text())["workers"] == 0

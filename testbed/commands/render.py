@@ -36,8 +36,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--params", metavar="FILE", help="pipeline parameters YAML (default assets/pipeline/default.yaml)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=int, default=None,
-                   help="local worker processes (default: number of cores; at most the episodes to render, "
-                        "0 or a single one = in this process)")
+                   help="local worker processes (default: number of cores; at most the episodes to render; "
+                        "0, or a single episode to render, runs in this process)")
     g.add_argument("--scheduler", help="address of an existing Dask scheduler (DIR must be shared)")
     m = p.add_mutually_exclusive_group()
     m.add_argument("--resume", action="store_true",
