@@ -100,6 +100,7 @@ def test_an_episode_folder_that_is_a_link_to_nowhere_is_named_so(tmp_path, capsy
     ({"index": "0"}, "episodes[0] lacks an integer index and frames, a name or a files mapping"),
     ({"frames": True}, "episodes[0] lacks an integer index and frames, a name or a files mapping"),
     ({"index": -1}, "episodes[0]: index -1, expected >= 0"),
+    ({"files": ["meta.json", "people.csv"]}, "episodes[0] lacks an integer index and frames, a name or a files mapping"),
 ])
 def test_a_manifest_with_a_value_out_of_bounds_is_not_read(tmp_path, capsys, change, problem):
     root = dataset(tmp_path / "ds", 1)
@@ -109,6 +110,14 @@ def test_a_manifest_with_a_value_out_of_bounds_is_not_read(tmp_path, capsys, cha
     m["episodes"][0].update({k: v for k, v in change.items() if k not in top})
     (root / MANIFEST).write_text(json.dumps(m))
     line = f"camtask verify: error: cannot read {root / MANIFEST} (not a camtask manifest: {problem})"
+    assert verify(capsys, root) == (2, [], line)
+
+
+def test_a_manifest_of_an_unknown_checksum_is_not_verified(tmp_path, capsys):
+    root = dataset(tmp_path / "ds", 1)
+    m = json.loads((root / MANIFEST).read_text())
+    (root / MANIFEST).write_text(json.dumps(m | {"checksum": "md5"}))
+    line = "camtask verify: error: manifest: checksum 'md5'; expected one of blake3, sha256"
     assert verify(capsys, root) == (2, [], line)
 
 
