@@ -255,6 +255,21 @@ def test_manifest_writer_rewrites_no_sooner_than_its_pace_allows(tmp_path, monke
     assert clock["now"] == 100.0 + 2 + 2 * writer.PACE + 2 + 2
 
 
+def test_manifest_writer_of_a_file_on_disk_rewrites_it_only_for_a_new_episode(tmp_path):
+    """on_disk: the file lists these episodes already (a finished run resumed): flush writes nothing."""
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import ManifestWriter
+
+    config = EpisodeConfig("lab", None, None, 1, 0)
+    entry = lambda i: {"index": i, "name": f"episode_{i:04d}", "files": {}}
+    writer = ManifestWriter(tmp_path, config, 2, {0: entry(0)}, on_disk=True)
+    writer.flush()
+    assert not (tmp_path / "manifest.json").exists()
+    writer.add(entry(1))
+    listed = json.loads((tmp_path / "manifest.json").read_text())["episodes"]
+    assert [e["index"] for e in listed] == [0, 1]
+
+
 def test_workers_that_do_not_see_the_output_folder_are_refused(tmp_path):
     from testbed.generate import _read_text, check_workers_share
 
