@@ -186,6 +186,23 @@ def test_a_left_lock_file_is_taken_over(tmp_path):
     assert not (out / LOCK).exists()
 
 
+def test_overwrite_under_the_lock_keeps_the_lock(tmp_path):
+    """--overwrite empties the folder but for this run's lock: a second run is still refused."""
+    from pipeline import load_params
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import LOCK, exclusive, prepare_output
+
+    config = EpisodeConfig("lab", None, (2,), 1, 0, "png", load_params().to_dict())
+    out = tmp_path / "ds"
+    prepare_output(out, config, 1, False, False)
+    (out / "episode_0000").mkdir()
+    with exclusive(out):
+        assert prepare_output(out, config, 1, False, True) == {}
+        assert sorted(p.name for p in out.iterdir()) == [LOCK, "manifest.json"]
+        with pytest.raises(FileExistsError, match="another camtask render is writing"), exclusive(out):
+            pass
+
+
 def test_workers_with_other_package_versions_are_refused():
     from testbed.generate import check_worker_versions, versions
 
@@ -1072,6 +1089,26 @@ def test_a_manifests_counts_are_integers_from_their_least(tmp_path, top, entry, 
         assert str(err.value) == f"cannot read {tmp_path / 'manifest.json'} (not a camtask manifest: {problem})"
 
 
+def test_a_manifest_of_an_earlier_layout_that_lists_no_episode_is_resumed(tmp_path):
+    """A run stopped before its first episode has no episodes of another layout to mix in."""
+    from pipeline import load_params
+    from testbed.episodes import EpisodeConfig
+    from testbed.generate import EPISODE_LAYOUT, prepare_output, read_manifest
+
+    config = EpisodeConfig("lab", None, (2,), 1, 0, "png", load_params().to_dict())
+    out = tmp_path / "ds"
+    prepare_output(out, config, 2, False, False)
+    m = read_manifest(out)
+    (out / "manifest.json").write_text(json.dumps(m | {"episode_layout": EPISODE_LAYOUT - 1}))
+    assert prepare_output(out, config, 2, True, False) == {}
+    assert read_manifest(out) == m                  # rewritten as this camtask's
+    listed = {"index": 0, "name": "episode_0000", "frames": 1, "files": {}}
+    (out / "manifest.json").write_text(json.dumps(m | {"episode_layout": EPISODE_LAYOUT - 1,
+                                                       "episodes": [listed]}))
+    with pytest.raises(ValueError, match=f"are of layout {EPISODE_LAYOUT - 1} \\(an earlier camtask\\)"):
+        prepare_output(out, config, 2, True, False)
+
+
 def test_problems_text_names_only_the_kinds_of_problem_found():
     from testbed.generate import problems_text
 
@@ -1113,6 +1150,15 @@ def test_exactly_the_room_needed_is_enough(tmp_path, monkeypatch):
         generate.check_space(tmp_path, 9_000_001, "one episode", freed=2_000_000)
     assert str(err.value) == (f"--out: 7 MB free on {tmp_path} (and 2 MB that --overwrite would free); "
                               "one episode needs about 9 MB")
+
+
+def test_the_space_of_an_out_not_yet_made_is_its_nearest_existing_parents(tmp_path):
+    from testbed.generate import check_space
+
+    with pytest.raises(ValueError) as err:
+        check_space(tmp_path / "new" / "ds", 10**18, "the run")
+    assert f" free on {tmp_path}; the run needs about 1e+06 TB" in str(err.value)
+    assert not (tmp_path / "new").exists()
 
 
 @pytest.mark.parametrize(("n", "text"), [
