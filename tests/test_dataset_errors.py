@@ -769,6 +769,22 @@ def test_an_episode_written_where_this_machine_does_not_see_it_is_not_listed(tmp
     assert 3 not in listed and listed == sorted(listed) and all((out / f"episode_{i:04d}").is_dir() for i in listed)
 
 
+def test_an_episode_folder_that_shows_a_little_late_here_is_waited_for(tmp_path, monkeypatch):
+    """A network file system may show a worker's renamed folder to this machine later."""
+    from testbed import generate as gen
+
+    naps = []
+
+    def sleep(seconds):
+        naps.append(seconds)
+        if len(naps) == 3:
+            (tmp_path / "episode_0002").mkdir()
+
+    monkeypatch.setattr(gen.time, "sleep", sleep)
+    gen.check_written_here(tmp_path, {"index": 2, "name": "episode_0002"}, "node7")
+    assert len(naps) == 3
+
+
 def test_params_that_cannot_give_a_picture_are_refused_before_any_work(tmp_path, capsys):
     """Every scanline would be empty: refused in one line before DIR is made, not in the episode."""
     params = tmp_path / "p.yaml"
