@@ -420,6 +420,48 @@ def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
     assert info.value.errno == errno.ENOSPC and list(tmp_path.iterdir()) == []
 
 
+def test_run_info_that_cannot_be_written_after_a_finished_run_is_the_error(tmp_path, monkeypatch):
+    """Nothing else went wrong: the run's record lost is the error to see."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 2, False, False)
+
+    def run_info(path, data):
+        raise OSError(f"cannot write {path}: No space left on device")
+
+    monkeypatch.setattr(gen, "render_episode", lambda config, i, out, *args, **kw: fake_episode(config, i, out))
+    monkeypatch.setattr(gen, "write_json_atomic", run_info)
+    with pytest.raises(OSError, match="run_info.json: No space"):
+        gen.generate(config, 2, out, {})
+    assert [e["index"] for e in json.loads((out / "manifest.json").read_text())["episodes"]] == [0, 1]
+
+
+def test_an_episode_failing_in_process_leaves_no_temporary_folder(tmp_path, monkeypatch):
+    """In this process nothing else can still be writing: what is unlisted goes at once."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 3, False, False)
+
+    def episode(config, index, out, *args, **kwargs):
+        if index == 1:
+            (Path(out) / ".episode_0001.k2j3.tmp" / "masks").mkdir(parents=True)
+            raise RuntimeError("episode 1 failed")
+        return fake_episode(config, index, out)
+
+    monkeypatch.setattr(gen, "render_episode", episode)
+    with pytest.raises(RuntimeError, match="episode 1 failed"):
+        gen.generate(config, 3, out, {})
+    assert sorted(p.name for p in out.iterdir()) == ["episode_0000", "manifest.json", "run_info.json"]
+
+
 def test_the_lock_and_run_info_do_not_hide_the_error_that_stopped_a_run(tmp_path, monkeypatch):
     from testbed.generate import exclusive
 
@@ -1151,6 +1193,8 @@ def test_resume_with_very_many_episodes_checks_the_folders_names_not_every_episo
     assert str(err.value) == (f"--resume: {tmp_path / 'episode_0021'} is a link, not an episode folder, and "
                               "episode 21 is to be written there: move it away")
     check_episode_names_free(tmp_path, {0: {}, 21: {}, 12345: {}}, 10**12)
+    with pytest.raises(FileExistsError, match="episode_12345 is a file, not an episode folder, and episode 12345"):
+        check_episode_names_free(tmp_path, {0: {}, 21: {}}, 10**12)
 
 
 def test_exactly_the_room_needed_is_enough(tmp_path, monkeypatch):
@@ -1229,6 +1273,24 @@ def test_version_changes_name_only_the_packages_that_make_the_bytes():
     assert version_changes(a, b, "then", "now") == "fpng 0.1 then, None now, isal None then, 1.7 now, " \
                                                    "numpy 2.3.0 then, 2.4.6 now"
     assert version_changes(a, a | {"distributed": "9"}, "there", "here") == ""
+
+
+def test_other_versions_are_those_of_the_last_run_not_the_first(tmp_path, monkeypatch, capsys):
+    """A run with other versions, resumed with this one's: the last run's episodes are this one's bytes
+    too, and the first run's (kept from then on) were compared when the last run resumed it."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2,), 1, 1, "png", load_params().to_dict())
+    monkeypatch.setattr(gen, "render_episode", lambda config, i, out, *args, **kw: fake_episode(config, i, out))
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 2, False, False)
+    first = {"versions": gen.versions() | {"numpy": "1.0.0"}}
+    (out / "run_info.json").write_text(json.dumps({"versions": gen.versions(), "earlier_runs": [first]}))
+    capsys.readouterr()
+    gen.generate(config, 2, out, {0: {"index": 0, "name": "episode_0000", "frames": 1}})
+    assert "other package versions" not in capsys.readouterr().err
 
 
 def test_in_flight_is_two_per_worker_thread_and_at_least_four():
@@ -1340,6 +1402,29 @@ def test_a_lock_file_its_holder_deleted_meanwhile_is_not_the_one_locked(tmp_path
         if not calls:                                 # the holder ends between our open and our lock
             (out / generate.LOCK).unlink()
             (out / generate.LOCK).write_bytes(b"")   # and the next run's file takes the name
+        calls.append(fd)
+
+    monkeypatch.setattr(generate.fcntl, "flock", flock)
+    fd = generate._lock(out / generate.LOCK, out)
+    try:
+        assert len(calls) == 2 and os.fstat(fd).st_ino == os.stat(out / generate.LOCK).st_ino
+    finally:
+        os.close(fd)
+
+
+def test_a_lock_file_its_holder_deleted_for_good_is_not_the_one_locked(tmp_path, monkeypatch):
+    """The holder ends and deletes the file between our open and our lock: a new file is locked."""
+    from testbed import generate
+
+    out = tmp_path / "ds"
+    out.mkdir()
+    calls = []
+    real_flock = generate.fcntl.flock
+
+    def flock(fd, op):
+        real_flock(fd, op)
+        if not calls:
+            (out / generate.LOCK).unlink()
         calls.append(fd)
 
     monkeypatch.setattr(generate.fcntl, "flock", flock)
