@@ -404,6 +404,25 @@ def test_resuming_a_finished_run_does_not_rewrite_its_manifest(tmp_path, monkeyp
         prepare_output(out, config, 4, True, False)
 
 
+def test_resuming_a_finished_run_writes_its_run_info_alone(tmp_path, monkeypatch):
+    """No episode left to render: the manifest prepare_output found on disk is not written again."""
+    from pipeline import files, load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 2, False, False)
+    monkeypatch.setattr(gen, "render_episode", lambda config, i, out, *args, **kw: fake_episode(config, i, out))
+    gen.generate(config, 2, out, {})
+    keep = gen.prepare_output(out, config, 2, True, False)
+    written = []
+    real = files.write_atomic
+    monkeypatch.setattr(files, "write_atomic", lambda path, data: (written.append(Path(path).name), real(path, data)))
+    assert sorted(gen.generate(config, 2, out, keep)) == [0, 1]
+    assert written == ["run_info.json"]
+
+
 def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
     import errno
 
