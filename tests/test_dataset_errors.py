@@ -404,6 +404,28 @@ def test_resuming_a_finished_run_does_not_rewrite_its_manifest(tmp_path, monkeyp
         prepare_output(out, config, 4, True, False)
 
 
+@pytest.mark.parametrize(("cores", "overlap"), [(1, False), (2, True)])
+def test_in_process_episodes_write_on_a_second_thread_only_with_a_second_core(tmp_path, monkeypatch, cores,
+                                                                               overlap):
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 2, False, False)
+    asked = []
+
+    def episode(config, i, out, progress, seconds, overlap):
+        asked.append(overlap)
+        return fake_episode(config, i, out)
+
+    monkeypatch.setattr(gen, "render_episode", episode)
+    monkeypatch.setattr(gen, "default_workers", lambda: cores)
+    gen.generate(config, 2, out, {})
+    assert asked == [overlap, overlap]
+
+
 def test_resuming_a_finished_run_writes_its_run_info_alone(tmp_path, monkeypatch):
     """No episode left to render: the manifest prepare_output found on disk is not written again."""
     from pipeline import files, load_params
@@ -1452,6 +1474,24 @@ def test_a_lock_file_its_holder_deleted_for_good_is_not_the_one_locked(tmp_path,
         assert len(calls) == 2 and os.fstat(fd).st_ino == os.stat(out / generate.LOCK).st_ino
     finally:
         os.close(fd)
+
+
+def test_a_file_system_that_cannot_lock_is_written_with_a_warning(tmp_path, monkeypatch, capsys):
+    import errno
+
+    from testbed import generate
+
+    out = tmp_path / "ds"
+    out.mkdir()
+
+    def flock(fd, op):
+        raise OSError(errno.ENOLCK, "No locks available")
+
+    monkeypatch.setattr(generate.fcntl, "flock", flock)
+    with generate.exclusive(out):
+        (out / "manifest.json").write_text("{}")
+    assert capsys.readouterr().err == (f"warning: --out: cannot lock {out / generate.LOCK} (No locks available): "
+                                       f"a second run into {out} would not be refused\n")
 
 
 def test_on_dask_an_episodes_last_frame_is_counted_once_it_is_listed(tmp_path, monkeypatch):
