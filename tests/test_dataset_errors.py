@@ -426,6 +426,49 @@ def test_in_process_episodes_write_on_a_second_thread_only_with_a_second_core(tm
     assert asked == [overlap, overlap]
 
 
+def test_an_error_lists_the_episodes_finished_since_the_last_rewrite(tmp_path, monkeypatch):
+    """The manifest is rewritten at the error: the episodes finished meanwhile are kept, not removed."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 3, False, False)
+
+    def episode(config, index, out, *args, **kwargs):
+        if index == 2:
+            raise RuntimeError("episode 2 failed")
+        return fake_episode(config, index, out)
+
+    monkeypatch.setattr(gen, "render_episode", episode)
+    monkeypatch.setattr(gen.ManifestWriter, "PACE", 1e12)     # no rewrite after the first
+    with pytest.raises(RuntimeError, match="episode 2 failed"):
+        gen.generate(config, 3, out, {})
+    assert [e["index"] for e in json.loads((out / "manifest.json").read_text())["episodes"]] == [0, 1]
+    assert (out / "episode_0001").is_dir()
+
+
+def test_generate_returns_the_entries_without_their_files(tmp_path, monkeypatch):
+    """Only the manifest keeps each file's checksum: ~3 MB an episode of 300 frames."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 2, False, False)
+
+    def episode(config, index, out, *args, **kwargs):
+        return fake_episode(config, index, out) | {"files": {"meta.json": "00"}}
+
+    monkeypatch.setattr(gen, "render_episode", episode)
+    done = gen.generate(config, 2, out, {})
+    assert sorted(done) == [0, 1] and not any("files" in e for e in done.values())
+    listed = json.loads((out / "manifest.json").read_text())["episodes"]
+    assert [e["files"] for e in listed] == [{"meta.json": "00"}] * 2
+
+
 def test_resuming_a_finished_run_writes_its_run_info_alone(tmp_path, monkeypatch):
     """No episode left to render: the manifest prepare_output found on disk is not written again."""
     from pipeline import files, load_params

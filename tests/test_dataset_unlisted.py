@@ -6,7 +6,7 @@ from testbed.generate import remove_unlisted, unlisted
 
 
 def test_only_a_runs_own_names_are_removed(tmp_path):
-    for folder in ("episode_0000", "episode_0003", ".episode_0004.k2j3.tmp", "episode_notes"):
+    for folder in ("episode_0000", "episode_0003", ".episode_0004.k2j3.tmp", "episode_notes", ".episode_notes.tmp"):
         (tmp_path / folder).mkdir()
     for name in ("episode_best.yaml", "episode_0007", ".manifest.json.x1y2.tmp", ".run_info.json.a.tmp",
                  "manifest.json", "notes.txt"):
@@ -18,7 +18,7 @@ def test_only_a_runs_own_names_are_removed(tmp_path):
     # a user's episode_best.yaml (tune --out) and episode_notes/ were deleted too; a file or a
     # link named like an episode is no folder a run made
     assert sorted(p.name for p in tmp_path.iterdir()) == [
-        "episode_0000", "episode_0007", "episode_0009", "episode_best.yaml", "episode_notes", "manifest.json",
+        ".episode_notes.tmp", "episode_0000", "episode_0007", "episode_0009", "episode_best.yaml", "episode_notes", "manifest.json",
         "notes.txt"]
 
 
@@ -47,3 +47,14 @@ def test_a_link_to_a_folder_and_short_numbers_are_not_a_runs(tmp_path):
     remove_unlisted(out, {})
     assert sorted(p.name for p in out.iterdir()) == ["episode_", "episode_0002", "episode_12"]
     assert (mine / "keep.txt").read_text() == "x"
+
+
+def test_a_link_named_as_a_runs_temporary_file_is_removed_not_its_target(tmp_path):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "keep.txt").write_text("x")
+    out = tmp_path / "ds"
+    out.mkdir()
+    (out / ".manifest.json.x1y2.tmp").symlink_to(mine)
+    remove_unlisted(out, {})
+    assert list(out.iterdir()) == [] and (mine / "keep.txt").read_text() == "x"
