@@ -1334,6 +1334,23 @@ def test_frames_in_progress_counts_the_first_cameras_masks_of_each_temporary_epi
     assert frames_in_progress(tmp_path) == {3: 4, 12: 2}
 
 
+@pytest.mark.parametrize("reverse", [False, True])
+def test_frames_in_progress_of_an_episode_in_two_temporary_folders_are_the_most(tmp_path, monkeypatch, reverse):
+    """A worker that died left its folder beside the next try's: the furthest on counts, found first or last."""
+    import pathlib
+
+    from testbed.generate import frames_in_progress
+
+    for folder, n in ((".episode_0003.a1.tmp", 5), (".episode_0003.b2.tmp", 2)):
+        (tmp_path / folder / "masks" / "cam01").mkdir(parents=True)
+        for f in range(n):
+            (tmp_path / folder / "masks" / "cam01" / f"{f:06d}.png").write_bytes(b"")
+    real = pathlib.Path.glob
+    monkeypatch.setattr(pathlib.Path, "glob", lambda self, pattern: iter(sorted(real(self, pattern),
+                                                                                   reverse=reverse)))
+    assert frames_in_progress(tmp_path) == {3: 5}
+
+
 @pytest.mark.parametrize(("text", "runs"), [
     (None, []),
     ("{bad", []),
