@@ -621,8 +621,18 @@ def test_a_ring_is_the_studies_cameras_numbered_from_angle_zero():
     ("hfov_deg: 60,", "hfov_deg: 60, principal: [31.5, -48.6],", r"^cameras.intrinsics.principal: .*got \[31.5, -48.6\]$"),
     ("radius: 0.25}", "radius: 0.25, height: 2.51}", r"^people.height: 2.51 m is above the ceiling \(2.5 m, room.height\)$"),
     ("people: {count: 2, radius: 0.25}\n", "", r"^scene: missing key 'people'$"),
+    # a missing key or a value of another kind: one line naming the key, not a KeyError or TypeError
+    ("height: 2.5}", "}", r"^room: missing key 'height'$"),
+    ("  intrinsics: {resolution: [64, 48], hfov_deg: 60, distortion: [0, 0, 0, 0, 0]}\n", "",
+     r"^cameras: missing key 'intrinsics'$"),
+    ("hfov_deg: 60, ", "", r"^cameras.intrinsics: missing key 'hfov_deg'$"),
+    (", distortion: [0, 0, 0, 0, 0]", "", r"^cameras.intrinsics: missing key 'distortion'$"),
+    ("count: 2, radius: 0.25", "count: 2", r"^people: missing key 'radius'$"),
+    ("hfov_deg: 60", "hfov_deg: null", r"^cameras.intrinsics.hfov_deg: expected a field of view in \[1, 179\] degrees, got None$"),
+    ("hfov_deg: 60", "hfov_deg: [60]", r"^cameras.intrinsics.hfov_deg: expected a field of view .*, got \[60\]$"),
+    ("radius: 0.25}", "radius: 0.25, positions: []}", r"^people.positions: expected shape \(2, 2\), got \(0,\)$"),
 ])
-def test_one_step_past_an_edge_is_refused(old, new, match):
+def test_one_step_past_an_edge_a_missing_key_or_another_kind_is_refused(old, new, match):
     with pytest.raises(ValueError, match=match):
         Scene.from_text(_edited(SMALL, old, new))
 
@@ -662,22 +672,6 @@ def test_a_scene_with_a_floor_camera_among_calibrated_ones_is_not_calibrated():
     small = Scene.from_text(SMALL)
     mixed = Scene("mixed", small.room, (small.cameras[0], FloorCamera(2, [1.0, 1.0], 0.0, 1.0)), small.people)
     assert small.is_calibrated and not mixed.is_calibrated
-
-
-@pytest.mark.parametrize("old, new, match", [
-    ("height: 2.5}", "}", r"^room: missing key 'height'$"),
-    ("  intrinsics: {resolution: [64, 48], hfov_deg: 60, distortion: [0, 0, 0, 0, 0]}\n", "",
-     r"^cameras: missing key 'intrinsics'$"),
-    ("hfov_deg: 60, ", "", r"^cameras.intrinsics: missing key 'hfov_deg'$"),
-    (", distortion: [0, 0, 0, 0, 0]", "", r"^cameras.intrinsics: missing key 'distortion'$"),
-    ("count: 2, radius: 0.25", "count: 2", r"^people: missing key 'radius'$"),
-    ("hfov_deg: 60", "hfov_deg: null", r"^cameras.intrinsics.hfov_deg: expected a field of view in \[1, 179\] degrees, got None$"),
-    ("hfov_deg: 60", "hfov_deg: [60]", r"^cameras.intrinsics.hfov_deg: expected a field of view .*, got \[60\]$"),
-    ("radius: 0.25}", "radius: 0.25, positions: []}", r"^people.positions: expected shape \(2, 2\), got \(0,\)$"),
-])
-def test_a_missing_key_or_a_value_of_another_kind_is_one_line(old, new, match):
-    with pytest.raises(ValueError, match=match):
-        Scene.from_text(_edited(SMALL, old, new))
 
 
 def test_a_circular_room_needs_its_radius_and_a_ring_a_field_of_view_that_is_a_number():
