@@ -39,8 +39,8 @@ class Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
         return super().construct_mapping(node, deep)
 
     def construct_yaml_int(self, node):
-        """An integer, or a YAML error where it is for one too long for Python to read (more
-        than ``sys.get_int_max_str_digits()`` digits: its ValueError named no file or line)."""
+        """An integer; one too long for Python to read (more than ``sys.get_int_max_str_digits()``
+        digits, whose ValueError named no file or line) is a YAML error at its line and column."""
         try:
             return super().construct_yaml_int(node)
         except ValueError:
