@@ -822,6 +822,41 @@ def test_dask_runs_keep_a_few_episodes_submitted_not_all(tmp_path, monkeypatch):
     assert client.most == 4 == gen.in_flight(client)         # two per worker thread, at least 4
 
 
+def test_an_episode_failing_on_dask_cancels_those_still_submitted(tmp_path, monkeypatch):
+    """Episode 1 fails while 2 and 3 are submitted: the run stops and cancels their futures
+    (and the failed one's) rather than leave them to render on the cluster; 4 and 5 are
+    never submitted."""
+    from pipeline import load_params
+    from testbed import generate as gen
+    from testbed.episodes import EpisodeConfig
+
+    cancelled = []
+
+    class Future(FakeFuture):
+        def cancel(self):
+            cancelled.append(self.args[1])
+
+    class Client(FakeClient):
+        def submit(self, fn, *args, pure, key):
+            self.submitted.append(Future(fn, args))
+            return self.submitted[-1]
+
+    def episode(config, index, out, *args, **kwargs):
+        if index == 1:
+            raise RuntimeError("episode 1 failed")
+        return fake_episode(config, index, out)
+
+    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
+    out = tmp_path / "data"
+    gen.prepare_output(out, config, 6, False, False)
+    monkeypatch.setattr(gen, "render_episode", episode)
+    client = Client()
+    with pytest.raises(RuntimeError, match="episode 1 failed"):
+        gen.generate(config, 6, out, {}, client)
+    assert [f.args[1] for f in client.submitted] == [0, 1, 2, 3]
+    assert sorted(cancelled) == [1, 2, 3]
+
+
 def test_a_cluster_that_loses_every_worker_says_so_once(tmp_path, monkeypatch, capsys):
     """An existing cluster whose workers all went (a batch system's time limit, the whole
     `dask worker` killed) left the run waiting without a word, its progress bar still."""
