@@ -404,16 +404,25 @@ def test_resuming_a_finished_run_does_not_rewrite_its_manifest(tmp_path, monkeyp
         prepare_output(out, config, 4, True, False)
 
 
-@pytest.mark.parametrize(("cores", "overlap"), [(1, False), (2, True)])
-def test_in_process_episodes_write_on_a_second_thread_only_with_a_second_core(tmp_path, monkeypatch, cores,
-                                                                               overlap):
+def _prepared(tmp_path, episodes: int):
+    """A lab run of cameras 2 and 7, one frame an episode, seed 1, PNG frames, and
+    tmp_path/data prepared for ``episodes`` episodes; returns (config, out)."""
     from pipeline import load_params
-    from testbed import generate as gen
     from testbed.episodes import EpisodeConfig
+    from testbed.generate import prepare_output
 
     config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
     out = tmp_path / "data"
-    gen.prepare_output(out, config, 2, False, False)
+    prepare_output(out, config, episodes, False, False)
+    return config, out
+
+
+@pytest.mark.parametrize(("cores", "overlap"), [(1, False), (2, True)])
+def test_in_process_episodes_write_on_a_second_thread_only_with_a_second_core(tmp_path, monkeypatch, cores,
+                                                                               overlap):
+    from testbed import generate as gen
+
+    config, out = _prepared(tmp_path, 2)
     asked = []
 
     def episode(config, i, out, progress, seconds, overlap):
@@ -428,13 +437,9 @@ def test_in_process_episodes_write_on_a_second_thread_only_with_a_second_core(tm
 
 def test_an_error_lists_the_episodes_finished_since_the_last_rewrite(tmp_path, monkeypatch):
     """The manifest is rewritten at the error: the episodes finished meanwhile are kept, not removed."""
-    from pipeline import load_params
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 3, False, False)
+    config, out = _prepared(tmp_path, 3)
 
     def episode(config, index, out, *args, **kwargs):
         if index == 2:
@@ -451,13 +456,9 @@ def test_an_error_lists_the_episodes_finished_since_the_last_rewrite(tmp_path, m
 
 def test_generate_returns_the_entries_without_their_files(tmp_path, monkeypatch):
     """Only the manifest keeps each file's checksum: ~3 MB an episode of 300 frames."""
-    from pipeline import load_params
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 2, False, False)
+    config, out = _prepared(tmp_path, 2)
 
     def episode(config, index, out, *args, **kwargs):
         return fake_episode(config, index, out) | {"files": {"meta.json": "00"}}
@@ -471,13 +472,10 @@ def test_generate_returns_the_entries_without_their_files(tmp_path, monkeypatch)
 
 def test_resuming_a_finished_run_writes_its_run_info_alone(tmp_path, monkeypatch):
     """No episode left to render: the manifest prepare_output found on disk is not written again."""
-    from pipeline import files, load_params
+    from pipeline import files
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 2, False, False)
+    config, out = _prepared(tmp_path, 2)
     monkeypatch.setattr(gen, "render_episode", lambda config, i, out, *args, **kw: fake_episode(config, i, out))
     gen.generate(config, 2, out, {})
     keep = gen.prepare_output(out, config, 2, True, False)
@@ -506,13 +504,9 @@ def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
 
 def test_run_info_that_cannot_be_written_after_a_finished_run_is_the_error(tmp_path, monkeypatch):
     """Nothing else went wrong: the run's record lost is the error to see."""
-    from pipeline import load_params
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 2, False, False)
+    config, out = _prepared(tmp_path, 2)
 
     def run_info(path, data):
         raise OSError(f"cannot write {path}: No space left on device")
@@ -526,13 +520,9 @@ def test_run_info_that_cannot_be_written_after_a_finished_run_is_the_error(tmp_p
 
 def test_an_episode_failing_in_process_leaves_no_temporary_folder(tmp_path, monkeypatch):
     """In this process nothing else can still be writing: what is unlisted goes at once."""
-    from pipeline import load_params
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 3, False, False)
+    config, out = _prepared(tmp_path, 3)
 
     def episode(config, index, out, *args, **kwargs):
         if index == 1:
@@ -578,13 +568,9 @@ def test_a_write_probe_left_by_a_killed_run_is_not_content(tmp_path, monkeypatch
 
 
 def test_run_info_that_cannot_be_written_does_not_hide_the_error_that_stopped_the_run(tmp_path, monkeypatch):
-    from pipeline import load_params
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 2, False, False)
+    config, out = _prepared(tmp_path, 2)
 
     def full(*args, **kwargs):
         raise OSError("cannot write DIR/.episode_0000.x.tmp/frames/cam02/000000.png: No space left on device")
@@ -808,13 +794,9 @@ def fake_episode(config, index, out, seconds=None):
 
 def test_dask_runs_keep_a_few_episodes_submitted_not_all(tmp_path, monkeypatch):
     """--episodes 200000 submitted at once slowed rendering tenfold; 10**12 filled the memory."""
-    from pipeline import load_params
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 30, False, False)
+    config, out = _prepared(tmp_path, 30)
     monkeypatch.setattr(gen, "render_episode", fake_episode)
     client = FakeClient()
     done = gen.generate(config, 30, out, {}, client)
@@ -826,9 +808,7 @@ def test_an_episode_failing_on_dask_cancels_those_still_submitted(tmp_path, monk
     """Episode 1 fails while 2 and 3 are submitted: the run stops and cancels their futures
     (and the failed one's) rather than leave them to render on the cluster; 4 and 5 are
     never submitted."""
-    from pipeline import load_params
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
     cancelled = []
 
@@ -846,9 +826,7 @@ def test_an_episode_failing_on_dask_cancels_those_still_submitted(tmp_path, monk
             raise RuntimeError("episode 1 failed")
         return fake_episode(config, index, out)
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 6, False, False)
+    config, out = _prepared(tmp_path, 6)
     monkeypatch.setattr(gen, "render_episode", episode)
     client = Client()
     with pytest.raises(RuntimeError, match="episode 1 failed"):
@@ -860,9 +838,7 @@ def test_an_episode_failing_on_dask_cancels_those_still_submitted(tmp_path, monk
 def test_a_cluster_that_loses_every_worker_says_so_once(tmp_path, monkeypatch, capsys):
     """An existing cluster whose workers all went (a batch system's time limit, the whole
     `dask worker` killed) left the run waiting without a word, its progress bar still."""
-    from pipeline import load_params
     from testbed import generate as gen
-    from testbed.episodes import EpisodeConfig
 
     class Client(FakeClient):
         scheduler = type("Rpc", (), {"address": "tcp://10.0.0.5:8786"})
@@ -874,9 +850,7 @@ def test_a_cluster_that_loses_every_worker_says_so_once(tmp_path, monkeypatch, c
         def nthreads(self):                     # the last look holds from then on
             return super().nthreads() if (self.workers.pop(0) if len(self.workers) > 1 else self.workers[0]) else {}
 
-    config = EpisodeConfig("lab", None, (2, 7), 1, 1, "png", load_params().to_dict())
-    out = tmp_path / "data"
-    gen.prepare_output(out, config, 10, False, False)
+    config, out = _prepared(tmp_path, 10)
     monkeypatch.setattr(gen, "render_episode", fake_episode)
     capsys.readouterr()
     done = gen.generate(config, 10, out, {}, Client([True, False, False, True, False, True, True]))
@@ -1521,14 +1495,14 @@ def test_run_info_counts_the_kept_episodes_as_done_and_names_the_hosts_of_those_
     assert info["episodes_done"] == 3 and list(info["episode_hosts"]) == ["episode_0000", "episode_0002"]
 
 
-def test_a_lock_file_its_holder_deleted_meanwhile_is_not_the_one_locked(tmp_path, monkeypatch):
+@pytest.mark.parametrize("next_run", [True, False])
+def test_a_lock_file_its_holder_deleted_meanwhile_is_not_the_one_locked(tmp_path, monkeypatch, next_run):
     """A run that ends deletes its lock file: a run that opened the old file just before
     would hold a lock on a file no longer in the folder, which a third run would not see;
-    it locks the file now at that name instead."""
+    it locks the file now at that name instead (the next run's, or a new one if none came)."""
     from testbed import generate
 
     real_flock = generate.fcntl.flock
-
     out = tmp_path / "ds"
     out.mkdir()
     calls = []
@@ -1537,30 +1511,8 @@ def test_a_lock_file_its_holder_deleted_meanwhile_is_not_the_one_locked(tmp_path
         real_flock(fd, op)
         if not calls:                                 # the holder ends between our open and our lock
             (out / generate.LOCK).unlink()
-            (out / generate.LOCK).write_bytes(b"")   # and the next run's file takes the name
-        calls.append(fd)
-
-    monkeypatch.setattr(generate.fcntl, "flock", flock)
-    fd = generate._lock(out / generate.LOCK, out)
-    try:
-        assert len(calls) == 2 and os.fstat(fd).st_ino == os.stat(out / generate.LOCK).st_ino
-    finally:
-        os.close(fd)
-
-
-def test_a_lock_file_its_holder_deleted_for_good_is_not_the_one_locked(tmp_path, monkeypatch):
-    """The holder ends and deletes the file between our open and our lock: a new file is locked."""
-    from testbed import generate
-
-    out = tmp_path / "ds"
-    out.mkdir()
-    calls = []
-    real_flock = generate.fcntl.flock
-
-    def flock(fd, op):
-        real_flock(fd, op)
-        if not calls:
-            (out / generate.LOCK).unlink()
+            if next_run:
+                (out / generate.LOCK).write_bytes(b"")   # and the next run's file takes the name
         calls.append(fd)
 
     monkeypatch.setattr(generate.fcntl, "flock", flock)

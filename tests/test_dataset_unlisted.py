@@ -33,13 +33,19 @@ def test_by_default_the_episodes_the_manifest_lists_are_kept(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["episode_0000", "episode_0002", "manifest.json"]
 
 
-def test_a_link_to_a_folder_and_short_numbers_are_not_a_runs(tmp_path):
-    """A run names its episodes with four digits or more and makes them as folders, never links."""
+def _users_folder_and_run(tmp_path):
+    """tmp_path/mine, a user's folder holding keep.txt ("x"), and tmp_path/ds, an empty --out."""
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "keep.txt").write_text("x")
     out = tmp_path / "ds"
     out.mkdir()
+    return mine, out
+
+
+def test_a_link_to_a_folder_and_short_numbers_are_not_a_runs(tmp_path):
+    """A run names its episodes with four digits or more and makes them as folders, never links."""
+    mine, out = _users_folder_and_run(tmp_path)
     (out / "episode_0002").symlink_to(mine)
     for folder in ("episode_12", "episode_", "episode_0003"):
         (out / folder).mkdir()
@@ -50,11 +56,7 @@ def test_a_link_to_a_folder_and_short_numbers_are_not_a_runs(tmp_path):
 
 
 def test_a_link_named_as_a_runs_temporary_file_is_removed_not_its_target(tmp_path):
-    mine = tmp_path / "mine"
-    mine.mkdir()
-    (mine / "keep.txt").write_text("x")
-    out = tmp_path / "ds"
-    out.mkdir()
+    mine, out = _users_folder_and_run(tmp_path)
     (out / ".manifest.json.x1y2.tmp").symlink_to(mine)
     remove_unlisted(out, {})
     assert list(out.iterdir()) == [] and (mine / "keep.txt").read_text() == "x"

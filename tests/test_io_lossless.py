@@ -25,18 +25,24 @@ def clip(n, h=30, w=41, seed=1):
     return [rng.integers(0, 256, (h, w, 3), dtype=np.uint8) for _ in range(n)]
 
 
+def spawned_processes(monkeypatch) -> list:
+    """The subprocesses started from now on (the ffmpegs), as a list that fills as they start."""
+    procs = []
+    real = subprocess.Popen
+
+    def popen(cmd, *args, **kwargs):
+        procs.append(real(cmd, *args, **kwargs))
+        return procs[-1]
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
+    return procs
+
+
 def test_one_ffmpeg_per_video(tmp_path, monkeypatch):
     """Opening the file once to read its size and again to decode it cost as much as the decoding."""
     frames = clip(3)
     path = write(tmp_path / "v.mkv", frames)
-    spawned = []
-    real = subprocess.Popen
-
-    def popen(cmd, *args, **kwargs):
-        spawned.append(cmd)
-        return real(cmd, *args, **kwargs)
-
-    monkeypatch.setattr(subprocess, "Popen", popen)
+    spawned = spawned_processes(monkeypatch)
     back = list(read_video(path, 3))
     assert len(spawned) == 1
     assert len(back) == 3
@@ -74,14 +80,7 @@ def test_not_a_video_names_the_file_and_ffmpeg_s_reason(tmp_path):
 
 def test_a_closed_reader_stops_its_ffmpeg(tmp_path, monkeypatch):
     path = write(tmp_path / "v.mkv", clip(5, 128, 128))     # more than a pipe holds: ffmpeg waits to write
-    procs = []
-    real = subprocess.Popen
-
-    def popen(cmd, *args, **kwargs):
-        procs.append(real(cmd, *args, **kwargs))
-        return procs[-1]
-
-    monkeypatch.setattr(subprocess, "Popen", popen)
+    procs = spawned_processes(monkeypatch)
     gen = read_video(path, 5)
     next(gen)
     closing = threading.Thread(target=gen.close)
@@ -478,14 +477,7 @@ def test_a_close_interrupted_while_ffmpeg_finishes_kills_it(tmp_path, monkeypatc
 def test_ffmpeg_runs_in_a_session_of_its_own(tmp_path, monkeypatch):
     """Ctrl-C at the terminal reaches camtask alone, which ends its ffmpegs itself."""
     path = write(tmp_path / "v.mkv", clip(5, 128, 128))     # more than a pipe holds: the reader's ffmpeg waits
-    procs = []
-    real = subprocess.Popen
-
-    def popen(cmd, *args, **kwargs):
-        procs.append(real(cmd, *args, **kwargs))
-        return procs[-1]
-
-    monkeypatch.setattr(subprocess, "Popen", popen)
+    procs = spawned_processes(monkeypatch)
     w = VideoWriter(tmp_path / "w.mkv", 41, 30, 7.5)
     frames = read_video(path, 5)
     next(frames)
@@ -540,12 +532,7 @@ def test_a_corrupt_frame_early_in_a_long_video_ends_ffmpeg(tmp_path, monkeypatch
     data[len(data) // 10] ^= 0xFF
     bad = tmp_path / "bad.mkv"
     bad.write_bytes(bytes(data))
-    procs, errors = [], []
-    real = subprocess.Popen
-
-    def popen(cmd, *args, **kwargs):
-        procs.append(real(cmd, *args, **kwargs))
-        return procs[-1]
+    errors = []
 
     def read():
         try:
@@ -553,7 +540,7 @@ def test_a_corrupt_frame_early_in_a_long_video_ends_ffmpeg(tmp_path, monkeypatch
         except ValueError as exc:
             errors.append(str(exc))
 
-    monkeypatch.setattr(subprocess, "Popen", popen)
+    procs = spawned_processes(monkeypatch)
     reading = threading.Thread(target=read)
     reading.start()
     reading.join(10)
