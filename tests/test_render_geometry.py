@@ -278,10 +278,12 @@ def test_people_meshes_take_the_lighting_given():
 def test_concatenated_meshes_are_float32():
     one = Mesh(np.zeros((3, 3)), np.ones((3, 3)), np.full(3, -1.0))               # float64 parts
     two = Mesh(np.ones((3, 3), np.float32), np.zeros((3, 3), np.float32), np.zeros(3, np.float32))
-    m = Mesh.concatenate([one, two])
+    three = Mesh(np.full((3, 3), 2.0), np.ones((3, 3)), np.ones(3))             # the renderer joins three
+    m = Mesh.concatenate(iter([one, two, three]))
     assert m.positions.dtype == m.colours.dtype == m.person.dtype == np.float32
-    assert np.array_equal(m.person, [-1, -1, -1, 0, 0, 0])
-    assert np.array_equal(m.positions, np.concatenate([np.zeros((3, 3)), np.ones((3, 3))]))
+    assert np.array_equal(m.person, [-1, -1, -1, 0, 0, 0, 1, 1, 1])
+    assert np.array_equal(m.positions, np.concatenate([np.zeros((3, 3)), np.ones((3, 3)), np.full((3, 3), 2.0)]))
+    assert np.array_equal(m.colours, np.concatenate([np.ones((3, 3)), np.zeros((3, 3)), np.ones((3, 3))]))
 
 
 def test_room_mesh_takes_the_lighting_given():
