@@ -300,3 +300,28 @@ def test_room_mesh_takes_the_lighting_given():
     d2 = 1.5**2 + 0.3**2
     _check_colours_at(lamp_only, [2.0, 0.0, 1.7],
                       np.array(WALL_COLOURS[0]) / 255 * 0.5 * 1.5 / np.sqrt(d2) * 4 / (1 + d2))
+
+
+@pytest.mark.parametrize("cell", [0.7, 5.0])
+def test_wall_cells_are_no_larger_than_cell_and_as_few_as_that_allows(cell):
+    """Wall 0 of the 4 x 3 x 2.5 m room is cut into ceil(4 / cell) equal columns and its
+    2.4 m above the 0.1 m baseboard into ceil(2.4 / cell) equal rows: 0.7 m gives 6 columns
+    of 0.67 m and 4 rows of 0.6 m, 5 m one column and one row."""
+    tri = room_mesh(Room.rectangle(4.0, 3.0, 2.5), cell=cell).positions.astype(float).reshape(-1, 3, 3)
+    z = tri[:, :, 2]
+    walls = ~np.all(z == 0, axis=1) & ~np.all(np.abs(z - 2.5) < 1e-6, axis=1)
+    wall0 = tri[walls & np.all(np.abs(tri[:, :, 1]) < 1e-6, axis=1)].reshape(-1, 3)
+    columns = np.diff(np.unique(np.round(wall0[:, 0], 5)))
+    rows = np.diff(np.unique(np.round(wall0[:, 2], 5)))[1:]                 # above the baseboard
+    assert len(columns) == int(np.ceil(4.0 / cell)) and len(rows) == int(np.ceil(2.4 / cell))
+    np.testing.assert_allclose(columns, 4.0 / len(columns), atol=1e-5)
+    np.testing.assert_allclose(rows, 2.4 / len(rows), atol=1e-5)
+    assert columns.max() <= cell and rows.max() <= cell
+
+
+def test_floor_tiles_are_a_foot():
+    """docs/render.md: the floor tiles are 1 ft (0.3048 m), from the room's corner."""
+    tri = room_mesh(Room.rectangle(4.0, 3.0, 2.5)).positions.astype(float).reshape(-1, 3, 3)
+    floor = tri[np.all(tri[:, :, 2] == 0, axis=1)]
+    np.testing.assert_allclose(np.unique(np.round(floor[:, :, 0], 5)), [*np.arange(14) * 0.3048, 4.0], atol=1e-5)
+    np.testing.assert_allclose(np.unique(np.round(floor[:, :, 1], 5)), [*np.arange(10) * 0.3048, 3.0], atol=1e-5)
