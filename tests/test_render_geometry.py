@@ -325,3 +325,26 @@ def test_floor_tiles_are_a_foot():
     floor = tri[np.all(tri[:, :, 2] == 0, axis=1)]
     np.testing.assert_allclose(np.unique(np.round(floor[:, :, 0], 5)), [*np.arange(14) * 0.3048, 4.0], atol=1e-5)
     np.testing.assert_allclose(np.unique(np.round(floor[:, :, 1], 5)), [*np.arange(10) * 0.3048, 3.0], atol=1e-5)
+
+
+def test_room_mesh_is_the_same_whatever_the_global_random_state():
+    """The floor's per-tile variation is part of the room, not of a run."""
+    room = Room.rectangle(4.0, 3.0, 2.5)
+    np.random.seed(1)
+    one = room_mesh(room)
+    np.random.seed(2)
+    two = room_mesh(room)
+    for f in ("positions", "colours", "person"):
+        assert np.array_equal(getattr(one, f), getattr(two, f))
+
+
+def test_the_lamp_hangs_over_the_floors_centroid():
+    """A right-triangle room with legs of 6 m: its centroid is (2, 2) (not the centre of its
+    bounds, (3, 3)). The lamp alone (strength 0.1, 1 m under the 2.5 m ceiling): the
+    ceiling at (2, 2) is straight above it, 4 / (1 + 1); at (1, 1), d = (1, 1, -1), cos
+    1 / sqrt(3), 4 / (1 + 3)."""
+    room = Room(np.array([[0.0, 0.0], [6.0, 0.0], [0.0, 6.0]]), 2.5)
+    mesh = room_mesh(room, Lighting(ambient=0.0, diffuse=0.0, lamp=0.1, lamp_drop=1.0))
+    ceiling = np.array(CEILING_COLOUR) / 255
+    _check_colours_at(mesh, [2.0, 2.0, 2.5], ceiling * 0.1 * 4 / 2)
+    _check_colours_at(mesh, [1.0, 1.0, 2.5], ceiling * 0.1 / np.sqrt(3))
