@@ -2,6 +2,7 @@
 
 import json
 import os
+import stat
 import xml.etree.ElementTree as ET
 
 import cv2
@@ -363,15 +364,32 @@ def test_bad_options_are_one_line_and_write_nothing(tmp_path, capsys, argv, line
     assert not (tmp_path / "wt").exists()
 
 
-def test_an_out_that_is_a_file_is_refused_and_kept(tmp_path, capsys):
+def test_an_unknown_layout_is_refused_before_anything_is_read(tmp_path, capsys):
+    """argparse's choices: the export's own check came after DIR and OUT were looked at."""
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as stop:
+        main(["export", "mvdet", str(tmp_path / "none"), str(tmp_path / "wt")])
+    assert stop.value.code == 2 and "argument layout: invalid choice: 'mvdet'" in capsys.readouterr().err
+    assert not (tmp_path / "wt").exists()
+
+
+@pytest.mark.parametrize("kind", ["file", "fifo"])
+def test_an_out_that_is_a_file_is_refused_and_kept(tmp_path, capsys, kind):
     episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
-    (tmp_path / "wt").write_text("mine")
+    if kind == "file":
+        (tmp_path / "wt").write_text("mine")
+    else:
+        os.mkfifo(tmp_path / "wt")                  # neither a folder nor a regular file
     capsys.readouterr()
     for extra in ([], ["--overwrite"]):
         assert main(["export", "wildtrack", str(episode), str(tmp_path / "wt"), *extra]) == 2
         assert capsys.readouterr().err.splitlines() == [
             f"camtask export: error: OUT: {tmp_path / 'wt'} exists and is not a directory"]
-    assert (tmp_path / "wt").read_text() == "mine"
+    if kind == "file":
+        assert (tmp_path / "wt").read_text() == "mine"
+    else:
+        assert stat.S_ISFIFO(os.lstat(tmp_path / "wt").st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ds", "wt"]
 
 
 @pytest.mark.parametrize("grid", ["not json {", '{"layout": "wildtrack"}', "[1, 2]",
