@@ -394,6 +394,8 @@ def test_an_out_that_is_a_file_is_refused_and_kept(tmp_path, capsys, kind):
 
 @pytest.mark.parametrize("grid", ["not json {", '{"layout": "wildtrack"}', "[1, 2]",
                                   '{"layout": "wildtrack", "cell_m": 0.025, "views": {"0": 1}}',   # no position_id
+                                  '{"layout": "wildtrack", "position_id": {}, "views": {"0": 1}}',  # no cell_m
+                                  '{"layout": "wildtrack", "cell_m": 0.025, "position_id": {}}',    # no views
                                   '{"layout": "other", "cell_m": 0.025, "position_id": {}, "views": []}'])
 def test_overwrite_refuses_a_folder_whose_grid_json_is_not_an_exports(tmp_path, capsys, grid):
     episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
