@@ -500,6 +500,16 @@ def test_overwrite_refuses_a_folder_whose_grid_json_is_a_folder(tmp_path, capsys
     assert (out / "grid.json").is_dir() and not any((out / "grid.json").iterdir())
 
 
+def test_read_grid_gives_an_exports_grid(tmp_path):
+    from testbed.commands.export import read_grid
+
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    assert main(["export", "multiviewx", str(episode), str(tmp_path / "wt")]) == 0
+    grid = read_grid(tmp_path / "wt" / "grid.json")
+    assert grid == json.loads((tmp_path / "wt" / "grid.json").read_text())
+    assert (grid["layout"], grid["source"]) == ("multiviewx", str(episode))
+
+
 def test_an_episode_of_a_sha256_manifest_is_checked_with_sha256(tmp_path, capsys):
     """A dataset written before manifest format 2 lists sha256 checksums (no "checksum" key):
     its episodes export, and a changed file is still named."""
