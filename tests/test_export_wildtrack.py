@@ -555,6 +555,27 @@ def test_an_out_inside_the_dataset_that_lists_an_episode_link_is_refused(tmp_pat
     assert main(["export", "wildtrack", str(tmp_path / "ds" / "episode_0000"), str(tmp_path / "wt")]) == 0
 
 
+def test_an_out_that_is_a_link_into_the_dataset_is_refused(tmp_path, capsys):
+    """OUT is where its link leads: the export would be written into the dataset."""
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
+    (tmp_path / "link").symlink_to(tmp_path / "ds" / "wt")      # to a folder not made yet
+    capsys.readouterr()
+    assert main(["export", "wildtrack", str(tmp_path / "ds"), str(tmp_path / "link")]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"camtask export: error: OUT: {tmp_path / 'link'} is inside DIR {tmp_path / 'ds'}; "
+         "choose a folder outside the dataset")]
+    assert sorted(p.name for p in (tmp_path / "ds").iterdir()) == [episode.name]
+
+
+def test_an_episode_option_takes_the_dataset_folder_of_that_name(tmp_path):
+    """Only an episode DIR's own index is held against --episode: a dataset's episode_0002
+    is episode 2, whatever index its meta.json (here a copy of episode 0's) holds."""
+    episode = hand_made_episode(tmp_path / "ds" / "episode_0002")
+    assert json.loads((episode / "meta.json").read_text())["episode"] == 0
+    assert main(["export", "wildtrack", str(tmp_path / "ds"), str(tmp_path / "wt"), "--episode", "2"]) == 0
+    assert json.loads((tmp_path / "wt" / "grid.json").read_text())["source"] == str(episode)
+
+
 def test_a_refused_out_names_its_first_files_in_name_order(tmp_path, capsys):
     episode = hand_made_episode(tmp_path / "ds" / "episode_0000")
     out = tmp_path / "mine"
