@@ -4,9 +4,11 @@ The renderer draws the ideal pinhole image on a slightly larger canvas (barrel
 distortion pulls the corners of the real image from beyond the ideal frame), then
 resamples it: for every pixel (u_d, v_d) of the distorted output image the map holds
 the ideal pinhole pixel that shows the same ray,
-``K_canvas @ undistort(K^-1 (u_d, v_d, 1))``. That is ``cv2.undistortPoints`` applied to
-the output pixel grid (an iterative inverse of the distortion model, polished by Newton
-steps where it stops short: :func:`scene.camera.undistort_points`), *not*
+``K_canvas @ undistort(K^-1 (u_d, v_d, 1))`` (without the skew ``K[0, 1]``, which
+``cv2.projectPoints`` and the OpenGL projection leave out). That is
+``cv2.undistortPoints`` applied to the output pixel grid (an iterative inverse of the
+distortion model, polished by Newton steps where it stops short:
+:func:`scene.camera.undistort_points`), *not*
 ``cv2.initUndistortRectifyMap``, whose map goes the other way (for each undistorted
 pixel, where it lies in the distorted image). With this map a world point projected
 by ``cv2.projectPoints(K, dist)`` lands on its rendered image.
@@ -68,7 +70,9 @@ def ideal_pixels(K, dist, width: int, height: int) -> np.ndarray:
     dist = check_array("dist", dist, (5,))
     v, u = np.mgrid[0:height, 0:width].astype(np.float64)
     xy = undistort_points(np.stack([u.ravel(), v.ravel()], axis=1), K, dist)
-    ideal = np.column_stack([xy, np.ones(len(xy))]) @ K[:2].T          # as cv2.undistortPoints(P=K)
+    # without the skew K[0, 1], which cv2.projectPoints and the OpenGL projection leave out
+    # (cv2.undistortPoints(P=K) would add it)
+    ideal = xy * [K[0, 0], K[1, 1]] + K[:2, 2]
     return ideal.reshape(height, width, 2)
 
 

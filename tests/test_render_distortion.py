@@ -1,6 +1,7 @@
 """Lens distortion without OpenGL: the canvas and its margin, resampling at the map,
 per-region resampling, and the output regions a change on the canvas can reach."""
 
+import cv2
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -253,3 +254,23 @@ def test_every_output_pixel_that_reads_a_rect_lies_in_its_region(dist, rects):
         rows, cols = np.nonzero(reads)
         assert r0 <= rows.min() and rows.max() < r1 and c0 <= cols.min() and cols.max() < c1
         assert r0 % BLOCK == 0 and c0 % BLOCK == 0 and 0 <= r0 < r1 <= 60 and 0 <= c0 < c1 <= 80
+
+
+def test_a_skewed_lens_maps_each_pixel_to_where_the_canvas_draws_its_ray():
+    """cv2.projectPoints and the OpenGL projection both leave out the skew K[0, 1]: each
+    output pixel reads the canvas where OpenGL draws the ray that cv2.projectPoints sends
+    to that pixel, not up to 3.8 px beside it (in the corners) as the skew would have it."""
+    from render.pose import project_opengl
+    from scene.camera import undistort_points
+
+    K = K_SMALL.copy()
+    K[0, 1] = 6.0
+    maps = distortion_maps(K, BARREL, 80, 60)
+    v, u = np.mgrid[0:60, 0:80]
+    uv = np.column_stack([u.ravel(), v.ravel()]).astype(float)
+    rays = np.column_stack([undistort_points(uv, K, BARREL), np.ones(len(uv))])
+    back = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), K, BARREL)[0].reshape(-1, 2)
+    np.testing.assert_allclose(back, uv, atol=1e-6)
+    cw, ch = maps.canvas_size
+    drawn = project_opengl(rays, np.eye(3), np.zeros(3), maps.canvas_K(K), cw, ch)
+    np.testing.assert_allclose(maps.map_xy.reshape(-1, 2), drawn, atol=1e-4)
