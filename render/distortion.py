@@ -57,8 +57,10 @@ class DistortionMaps:
     block_hi: np.ndarray = None
 
     def canvas_K(self, K) -> np.ndarray:
-        """The ideal canvas's camera matrix, (3, 3) pixels."""
+        """The ideal canvas's camera matrix, (3, 3) pixels, without the skew ``K[0, 1]``
+        (which ``cv2.projectPoints`` and the OpenGL projection leave out)."""
         Kc = np.array(K, float)
+        Kc[0, 1] = 0.0
         Kc[0, 2] += self.offset[0]
         Kc[1, 2] += self.offset[1]
         return Kc
