@@ -260,6 +260,39 @@ def test_tune_logs_nothing_of_its_trials():
     assert [r.getMessage() for r in records] == []
 
 
+def test_a_trial_that_raises_is_not_logged(monkeypatch):
+    """Optuna logs a failed trial at WARNING with its traceback ("Trial 1 failed ..."): the
+    error is raised to the caller, who says it once."""
+    import logging
+
+    import optuna
+
+    cams = tiny_cameras()
+    bg, frames, _ = synthetic_sequence(cams, 1, np.random.default_rng(0))
+    records, calls = [], []
+    handler = logging.Handler()
+    handler.emit = records.append
+    logger = logging.getLogger("optuna")
+
+    def scanline_f1(*args):
+        calls.append(1)
+        if len(calls) == 2:
+            raise ValueError("a trial failed")
+        return 0.5
+    monkeypatch.setattr(pipeline.tuning, "scanline_f1", scanline_f1)
+    before = optuna.logging.get_verbosity()
+    optuna.logging.set_verbosity(optuna.logging.INFO)
+    logger.addHandler(handler)
+    try:
+        with pytest.raises(ValueError, match="^a trial failed$"):
+            pipeline.tuning.tune(cams, bg, frames, np.zeros((1, 2, 64), bool), 3)
+    finally:
+        logger.removeHandler(handler)
+        optuna.logging.set_verbosity(before)
+    assert len(calls) == 2
+    assert [r.getMessage() for r in records] == []
+
+
 def test_the_search_space_is_the_one_documented():
     """pipeline.tuning.SPACE against the table of docs/pipeline.md."""
     import re
