@@ -326,6 +326,21 @@ def test_the_seeds_the_command_accepts_seed_the_search(seed):
     assert runs[0].f1.tolist() == runs[1].f1.tolist()
 
 
+def test_suggest_draws_from_the_whole_searched_range():
+    """Each parameter drawn by a random sampler's trials stays in its searched range and
+    reaches both of its ends: an integer takes them, a float comes within a fifth of the range."""
+    import optuna
+
+    space = pipeline.tuning.searched_space(tiny_cameras())
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
+    drawn = [pipeline.tuning.suggest(study.ask(), space) for _ in range(100)]
+    for name, (kind, low, high, *_) in space.items():
+        values = [getattr(p, name) for p in drawn]
+        assert low <= min(values) and max(values) <= high, name
+        reach = 0 if kind == "int" else (high - low) / 5
+        assert min(values) <= low + reach and max(values) >= high - reach, (name, min(values), max(values))
+
+
 @pytest.mark.parametrize(("argv", "line"), [
     (["--trials", "0"], "--trials: expected an integer >= 1, got 0"),
     (["--trials", "-2"], "--trials: expected an integer >= 1, got -2"),
