@@ -326,6 +326,27 @@ def test_the_seeds_the_command_accepts_seed_the_search(seed):
     assert runs[0].f1.tolist() == runs[1].f1.tolist()
 
 
+def _tried(monkeypatch, n_trials, seed, f1=lambda params: 0.5):
+    """The parameters of each trial of tune on the tiny cameras, scored by ``f1``."""
+    cams = tiny_cameras()
+    bg, frames, _ = synthetic_sequence(cams, 1, np.random.default_rng(0))
+    tried = []
+
+    def scanline_f1(base, frames, gt, params):
+        tried.append(params)
+        return f1(params)
+    monkeypatch.setattr(pipeline.tuning, "scanline_f1", scanline_f1)
+    pipeline.tuning.tune(cams, bg, frames, np.zeros((1, 2, 64), bool), n_trials, seed=seed)
+    return tried
+
+
+def test_other_seeds_try_other_parameters(monkeypatch):
+    """The start is the first trial whatever the seed; the seed draws the ones after it."""
+    runs = {seed: _tried(monkeypatch, 3, seed) for seed in (0, 1, 2**32 - 1)}
+    assert len({run[0] for run in runs.values()}) == 1
+    assert len({tuple(run[1:]) for run in runs.values()}) == 3
+
+
 def test_suggest_draws_from_the_whole_searched_range():
     """Each parameter drawn by a random sampler's trials stays in its searched range and
     reaches both of its ends: an integer takes them, a float comes within a fifth of the range."""
@@ -339,6 +360,16 @@ def test_suggest_draws_from_the_whole_searched_range():
         assert low <= min(values) and max(values) <= high, name
         reach = 0 if kind == "int" else (high - low) / 5
         assert min(values) <= low + reach and max(values) >= high - reach, (name, min(values), max(values))
+
+
+def test_the_search_draws_near_the_best_trials(monkeypatch):
+    """TPE: after the start and ten random trials, most trials are near the best F1 (here
+    threshold_deg within 5 of 20); a random search over 1..30 puts about one in three there."""
+    near = []
+    for seed in (0, 1):
+        tried = _tried(monkeypatch, 40, seed, lambda p: 1 - abs(p.threshold_deg - 20.0) / 30)
+        near += [abs(p.threshold_deg - 20.0) < 5 for p in tried[11:]]
+    assert np.mean(near) > 0.6, np.mean(near)
 
 
 @pytest.mark.parametrize(("argv", "line"), [
