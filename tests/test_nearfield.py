@@ -496,3 +496,19 @@ def test_given_pixels_per_radian_are_each_cameras_own_and_a_range_of_one_distanc
     assert np.concatenate(got).tolist() == [np.inf, np.inf]
     got = sight_range(cams[:1], 1.75, object_width=blind / 1000.0, columns=0.5, pixels_per_radian=[1024.0])
     assert got[0][0] == blind and got[1][0] == pytest.approx(1.024 * blind, rel=1e-12)
+
+
+def test_raw_pixels_per_radian_finds_the_widest_pixel_in_an_inner_row():
+    """A level pincushion lens (k1 > 0) whose principal point lies on row 10: its raw pixels
+    span most bearing at the principal point, neither on the first, the middle nor the last
+    row. Against every pixel row, undistorted by OpenCV: within the rows' spacing."""
+    cam = Camera.from_pose(1, [0.0, 0.0, 1.5], 0.0, 0.0, 64, 48, np.radians(50.0), [0.5, 0.0, 0.0, 0.0, 0.0],
+                           principal=(31.5, 10.0))
+    us = np.arange(cam.width + 1) - 0.5
+    uv = np.stack(np.meshgrid(us, np.arange(cam.height, dtype=float)), -1).reshape(-1, 1, 2)
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-15)
+    x = cv2.undistortPoints(uv, cam.K, cam.dist, None, None, None, criteria)[:, 0, 0].reshape(cam.height, -1)
+    steps = np.diff(np.arctan(x), axis=1)                     # level: the bearing is atan(x)
+    assert np.unravel_index(steps.argmax(), steps.shape)[0] == 10
+    assert raw_pixels_per_radian(cam) == pytest.approx(1.0 / steps.max(), rel=1e-4)
+
