@@ -512,3 +512,17 @@ def test_raw_pixels_per_radian_finds_the_widest_pixel_in_an_inner_row():
     assert np.unravel_index(steps.argmax(), steps.shape)[0] == 10
     assert raw_pixels_per_radian(cam) == pytest.approx(1.0 / steps.max(), rel=1e-4)
 
+
+def test_margin_and_columns_are_pixels_of_the_width_given(lab):
+    """Rectified to 2 W - 1 columns the level camera has twice the pixels per radian (the same
+    band, columns 0 and width - 1 at its ends), so a margin and a run of columns twice as many
+    there give the range of the default width's (to the finer grid's column nearer the axis,
+    where the height limits far); the default's margin there gives another."""
+    cams = lab.cameras[:2]
+    width = 2 * cams[0].width - 1
+    assert level_cameras(cams, width)[0][:, 0, 0] == pytest.approx(2 * level_cameras(cams)[0][:, 0, 0], rel=1e-12)
+    for kw in (dict(), dict(object_width=0.03, raw_columns=0.01)):
+        want = sight_range(cams, 1.75, 3.0, columns=1.0, **kw)
+        got = sight_range(cams, 1.75, 6.0, width, columns=2.0, **kw)
+        np.testing.assert_allclose(np.concatenate(got), np.concatenate(want), rtol=1e-6)
+    assert np.all(sight_range(cams, 1.75, 3.0, width)[0] < want[0])
