@@ -159,6 +159,21 @@ def test_the_default_clipping_planes_are_5_cm_and_50_m():
     assert -1.0 < ndc_z[2] < 1.0
 
 
+def test_a_skew_in_K_is_left_out_as_projectpoints_leaves_it_out():
+    """A skew K[0, 1] changes neither the projection matrix nor where project_opengl puts a
+    point: both agree with cv2.projectPoints, which leaves the skew out (docs/conventions.md)."""
+    K = np.array([[500.0, 0.0, 300.0], [0.0, 480.0, 200.0], [0.0, 0.0, 1.0]])
+    skewed = K.copy()
+    skewed[0, 1] = 40.0
+    np.testing.assert_array_equal(projection_matrix(skewed, 640, 480), projection_matrix(K, 640, 480))
+    R, _ = cv2.Rodrigues(np.array([0.1, -0.2, 0.3]))
+    t = np.array([0.2, -0.1, 3.0])
+    pts = np.random.default_rng(0).uniform(-1.0, 1.0, (20, 3))
+    expected = cv2.projectPoints(pts, cv2.Rodrigues(R)[0], t, skewed, None)[0].reshape(-1, 2)
+    np.testing.assert_allclose(expected, cv2.projectPoints(pts, cv2.Rodrigues(R)[0], t, K, None)[0].reshape(-1, 2))
+    np.testing.assert_allclose(project_opengl(pts, R, t, skewed, 640, 480), expected, atol=1e-6)
+
+
 @pytest.mark.parametrize("call, message", [
     (lambda: opencv_to_opengl_pose(np.eye(3)[:2], np.zeros(3)), r"R: expected shape \(3, 3\), got \(2, 3\)"),
     (lambda: opencv_to_opengl_pose(np.eye(3), [0.0, np.nan, 0.0]), "t: expected finite numbers"),
