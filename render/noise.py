@@ -91,7 +91,9 @@ def degrade(rgb: np.ndarray, noise_std: float, gain_jitter: float, rng: np.rando
     if noise_std > 0 and pool is None:
         pool = noise_pool(float(noise_std), size)
     for i in range(n):
-        flat = rgb[i].reshape(H, -1)
+        flat = rgb[i].reshape(H, -1)                # a copy if a row's bytes are not contiguous
         noise = pool[offsets[i]:offsets[i] + size].reshape(flat.shape) if noise_std > 0 else None
         sense(flat, flat, gains[i], noise)
+        if not np.may_share_memory(flat, rgb):
+            rgb[i] = flat.reshape(rgb[i].shape)
     return rgb

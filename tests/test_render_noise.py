@@ -130,3 +130,21 @@ def test_degrade_without_noise_ignores_a_given_pool_and_builds_none(monkeypatch)
     monkeypatch.setattr(render.noise, "noise_pool", no_pool)
     out = degrade(rgb.copy(), 0.0, 0.2, np.random.default_rng(8))
     np.testing.assert_allclose(out, expected, atol=1)
+
+
+@pytest.mark.parametrize("shape, index", [
+    ((2, 4, 5, 4), np.s_[..., :3]),             # the RGB of an RGBA buffer
+    ((2, 4, 5, 3), np.s_[..., ::-1]),           # a BGR view
+    ((2, 4, 7, 3), np.s_[:, :, :5]),            # a crop
+], ids=["rgb-of-rgba", "bgr", "crop"])
+def test_degrade_modifies_a_view_in_place(shape, index):
+    """Frames whose rows' bytes are not contiguous are degraded in place as a contiguous copy is (not
+    returned clean), and the rest of their buffer is left alone."""
+    buffer = np.random.default_rng(12).integers(0, 256, shape, dtype=np.uint8)
+    rgb = buffer[index]
+    expected = degrade(rgb.copy(), 2.0, 0.1, np.random.default_rng(3))
+    assert not np.array_equal(expected, rgb)
+    rest = buffer.copy()
+    rest[index] = expected
+    assert degrade(rgb, 2.0, 0.1, np.random.default_rng(3)) is rgb
+    assert np.array_equal(buffer, rest)
