@@ -148,3 +148,11 @@ def test_degrade_modifies_a_view_in_place(shape, index):
     rest[index] = expected
     assert degrade(rgb, 2.0, 0.1, np.random.default_rng(3)) is rgb
     assert np.array_equal(buffer, rest)
+
+
+def test_the_pool_is_built_once_per_noise_std_and_frame_size():
+    """The pool degrade builds when none is given is cached: one (noise_std, size) gives the
+    same array on every call (not 8 M fresh samples per frame), another noise_std another."""
+    pool = noise_pool(1.5, 24)
+    assert noise_pool(1.5, 24) is pool
+    assert noise_pool(3.0, 24) is not pool
