@@ -24,25 +24,37 @@ ALONG_X = np.array([[0.0, 0.0], [1.0, 0.0]])          # pair axes 0 and 90 degre
 
 def test_pair_axes_keep_estimates_a_tenth_of_a_millimetre_apart():
     """Two estimates 0.1 mm apart are distinct centres (only coinciding ones, within
-    1e-12 m, give no axis): their diagonal and its perpendicular, 45 and 135 degrees."""
+    1e-12 m, give no axis, 1e-12 m included): their diagonal and its perpendicular, 45 and
+    135 degrees."""
     got = pair_axes(np.array([[0.2, 0.3], [0.2001, 0.3001]]))
     np.testing.assert_allclose(got, np.radians([45.0, 135.0]), atol=1e-9)
     got = pair_axes(np.array([[0.2, 0.3], [0.2, 0.3001]]))
     np.testing.assert_allclose(got, np.radians([90.0, 0.0]), atol=1e-9)
+    assert pair_axes(np.array([[0.0, 0.0], [1e-12, 0.0]])).size == 0
 
 
 def test_cluster_axes_of_axes_without_their_perpendiculars_are_not_turned():
-    """Two axes a milliradian short of a quarter turn apart are not closed under a quarter
-    turn, so there is no twin solution: each axis is its own cluster, centres exactly on
-    them, in increasing order (equal sizes). A twin taken for them would be 1 mrad off."""
-    axes = np.array([0.3, 0.3 + np.pi / 2 - 1e-3])
-    centres, sizes = cluster_axes(axes, 2, seed=0)
-    np.testing.assert_allclose(centres, axes, atol=1e-9)
-    assert sizes.tolist() == [1, 1]
+    """Two axes a milliradian (or a microradian) short of a quarter turn apart are not closed
+    under a quarter turn, so there is no twin solution: each axis is its own cluster, centres
+    exactly on them, in increasing order (equal sizes). A twin taken for them would be off by
+    that much."""
+    for short in (1e-3, 1e-6):
+        axes = np.array([0.3, 0.3 + np.pi / 2 - short])
+        centres, sizes = cluster_axes(axes, 2, seed=0)
+        np.testing.assert_allclose(centres, axes, atol=1e-12)
+        assert sizes.tolist() == [1, 1]
     axes = np.array([2.0, 2.0, 2.0, 2.0 - np.pi / 2 + 1e-3])   # twin would be [0.43, 0.43 + pi / 2]
     centres, sizes = cluster_axes(axes, 2, seed=0)
     np.testing.assert_allclose(centres, [2.0, 2.0 - np.pi / 2 + 1e-3], atol=1e-9)
     assert sizes.tolist() == [3, 1]
+
+
+def test_cluster_axes_a_microradian_apart_are_two_clusters():
+    """Only axes ~1e-10 rad apart are one to k-means (docs): two a microradian apart, k = 2,
+    are a cluster each, centred on them."""
+    centres, sizes = cluster_axes(np.array([0.3, 0.3 + 1e-6]), 2, seed=0)
+    np.testing.assert_allclose(centres, [0.3, 0.3 + 1e-6], atol=1e-12)
+    assert sizes.tolist() == [1, 1]
 
 
 def test_a_camera_a_microradian_off_the_axis_loses_to_one_on_it():
@@ -232,7 +244,11 @@ def test_axes_that_round_apart_still_have_their_twin_solution_taken_first():
 
 def test_of_equal_clusters_the_one_on_the_axis_0_comes_first_even_just_below_pi():
     """Axes 0.1 and pi - 0.1 - 4e-12 average to a centre 2e-12 rad below pi, the axis 0:
-    of two clusters of two it comes before the one at 1.05 rad (and picks first)."""
+    of two clusters of two it comes before the one at 1.05 rad (and picks first). A centre
+    1e-7 rad below pi is not within 1e-9 of it: it comes after 1.05."""
     centres, sizes = cluster_axes(np.array([0.1, np.pi - 0.1 - 4e-12, 1.0, 1.1]), 2, seed=0)
     assert sizes.tolist() == [2, 2]
     assert axial_distance(centres[0], 0.0) < 1e-9 and centres[1] == pytest.approx(1.05, abs=1e-9)
+    centres, sizes = cluster_axes(np.array([0.1, np.pi - 0.1 - 2e-7, 1.0, 1.1]), 2, seed=0)
+    np.testing.assert_allclose(centres, [1.05, np.pi - 1e-7], atol=1e-9)
+
