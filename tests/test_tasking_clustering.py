@@ -104,6 +104,22 @@ def test_clustering_pins_blas_and_openmp_to_one_thread():
         assert pools and all(p["num_threads"] == 1 for p in pools)
 
 
+def test_cluster_axes_fit_k_means_on_one_thread(monkeypatch):
+    """cluster_axes fits k-means inside that context: each pool has one thread during the fit."""
+    from sklearn.cluster import KMeans
+    from threadpoolctl import threadpool_info
+
+    fit, seen = KMeans.fit, []
+
+    def recording_fit(self, *args, **kwargs):
+        seen.append([p["num_threads"] for p in threadpool_info()])
+        return fit(self, *args, **kwargs)
+
+    monkeypatch.setattr(KMeans, "fit", recording_fit)
+    cluster_axes(pair_axes(ALONG_X), 2, seed=0)
+    assert len(seen) == 1 and seen[0] and set(seen[0]) == {1}
+
+
 def test_the_kmeans_seed_reaches_kmeans():
     """k-means is a heuristic: on this drop of six estimates (30 axes, 3 clusters) k-means'
     ten starts end in other local optima for other seeds. Each seed gives its own result,
