@@ -268,3 +268,42 @@ def test_of_equal_clusters_the_one_on_the_axis_0_comes_first_even_just_below_pi(
     centres, sizes = cluster_axes(np.array([0.1, np.pi - 0.1 - 2e-7, 1.0, 1.1]), 2, seed=0)
     np.testing.assert_allclose(centres, [1.05, np.pi - 1e-7], atol=1e-9)
 
+
+def test_cluster_axes_of_mirrored_estimates_do_not_depend_on_their_order_or_turns_of_pi():
+    """Four estimates mirrored about the x axis: pair vectors of mirrored pairs differ in the
+    last bit of their angle by the estimates' order, and the axes sorted as they came ended in
+    other clusters for some orders. Every order gives the same clusters, and so does every
+    multiple of pi the axes are written with."""
+    from itertools import permutations
+
+    est = np.array([[-0.14, 0.38], [0.34, 0.69], [-0.14, -0.38], [0.34, -0.69]])
+    centres, sizes = cluster_axes(pair_axes(est), 4, seed=0)
+    for order in permutations(range(4)):
+        c2, s2 = cluster_axes(pair_axes(est[list(order)]), 4, seed=0)
+        np.testing.assert_array_equal(s2, sizes)
+        assert np.all(axial_distance(c2, centres) < 1e-9), order
+    est = np.array([[-0.19, 0.8], [0.77, 0.3], [-0.19, -0.8], [0.77, -0.3]])
+    axes = pair_axes(est)
+    centres, sizes = cluster_axes(axes, 3, seed=0)
+    for turns in (-2, -1, 1, 3):
+        c2, s2 = cluster_axes(axes + turns * np.pi, 3, seed=0)
+        np.testing.assert_array_equal(s2, sizes)
+        assert np.all(axial_distance(c2, centres) < 1e-9), turns
+
+
+def test_twin_solutions_of_axes_under_a_milliradian_apart_are_one_whatever_the_kmeans_seed():
+    """Three pairs of estimates mirrored about the x axis and a seventh: some of their axes are
+    0.9 mrad apart (only points within 1e-8 count as one: the quarter-turn test still finds
+    every axis's perpendicular). k = 3: every seed returns the twin whose centres come first. k = 5: of three clusters of nine, the one on the axis 0 (at 1e-14 or at pi - 1e-14
+    rad) comes first in the twin too."""
+    est = np.array([[-0.23, 0.11], [-0.29, 0.15], [-0.26, -0.17], [0.62, -0.44], [-0.23, -0.11],
+                    [-0.29, -0.15], [-0.26, 0.17]])
+    axes = pair_axes(est)
+    for seed in range(4):
+        centres, sizes = cluster_axes(axes, 3, seed=seed)
+        assert sizes.tolist() == [18, 13, 11]
+        np.testing.assert_allclose(centres, [1.327281, 2.559959, 0.161939], atol=1e-6)
+    for seed in (0, 4):
+        centres, sizes = cluster_axes(axes, 5, seed=seed)
+        assert sizes.tolist() == [11, 9, 9, 9, 4]
+        assert np.all(axial_distance(centres, [1.46213, 0.0, 0.857453, 2.655192, 2.039162]) < 1e-6)
