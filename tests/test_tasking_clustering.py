@@ -294,8 +294,9 @@ def test_cluster_axes_of_mirrored_estimates_do_not_depend_on_their_order_or_turn
 def test_twin_solutions_of_axes_under_a_milliradian_apart_are_one_whatever_the_kmeans_seed():
     """Three pairs of estimates mirrored about the x axis and a seventh: some of their axes are
     0.9 mrad apart (only points within 1e-8 count as one: the quarter-turn test still finds
-    every axis's perpendicular). k = 3: every seed returns the twin whose centres come first. k = 5: of three clusters of nine, the one on the axis 0 (at 1e-14 or at pi - 1e-14
-    rad) comes first in the twin too."""
+    every axis's perpendicular). k = 3: every seed returns the twin whose centres come first.
+    k = 5: of three clusters of nine, the one on the axis 0 (at 1e-14 or at pi - 1e-14 rad)
+    comes first in the twin too."""
     est = np.array([[-0.23, 0.11], [-0.29, 0.15], [-0.26, -0.17], [0.62, -0.44], [-0.23, -0.11],
                     [-0.29, -0.15], [-0.26, 0.17]])
     axes = pair_axes(est)
