@@ -318,3 +318,30 @@ def test_without_undistort_the_images_are_the_episodes_own_png_files_byte_for_by
             for f in (0, 1):
                 assert (out / "Image_subsets" / f"C{n}" / f"{f:0{digits}d}.png").read_bytes() == \
                     (ep / "frames" / f"cam{n:02d}" / f"{f:06d}.png").read_bytes()
+
+
+def test_the_new_export_and_the_earlier_one_wait_beside_out_and_the_episode_is_left_alone(tmp_path, monkeypatch):
+    """While the new export is renamed into place, it and the earlier one moved aside are
+    hidden folders beside OUT (renames in one folder, on one file system); the episode folder
+    (a dataset that may be read-only) never holds any of it."""
+    from testbed import wildtrack
+
+    ep = make_episode(tmp_path / "data" / "episode_0000", np.array([[[1.0, 2.0]]]), {})
+    files = sorted(p.relative_to(ep) for p in ep.rglob("*"))
+    out = export_episode(ep, tmp_path / "exports" / "wt")
+    real, seen = os.rename, []
+
+    def rename(src, dst):
+        seen.append((Path(src), Path(dst), sorted(p.relative_to(ep) for p in ep.rglob("*")),
+                     sorted(p.name for p in out.parent.iterdir())))
+        return real(src, dst)
+
+    monkeypatch.setattr(wildtrack.os, "rename", rename)
+    export_episode(ep, out)
+    ((src, dst, in_episode, beside),) = seen
+    assert dst == out and src.parent == out.parent and src.name.startswith(".wt.")
+    assert len(beside) == 2 and src.name in beside
+    aside = next(name for name in beside if name != src.name)
+    assert aside.startswith(".wt.replaced-")
+    assert in_episode == files
+    assert sorted(p.name for p in out.parent.iterdir()) == ["wt"]
