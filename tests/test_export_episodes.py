@@ -345,3 +345,16 @@ def test_the_new_export_and_the_earlier_one_wait_beside_out_and_the_episode_is_l
     assert aside.startswith(".wt.replaced-")
     assert in_episode == files
     assert sorted(p.name for p in out.parent.iterdir()) == ["wt"]
+
+
+def test_an_episode_whose_meta_json_names_no_format_exports_its_png_frames(tmp_path):
+    """meta.json's "format" is not one of the keys read_meta requires: without it the frames
+    are the PNG files under frames/, as in a `--format png` episode."""
+    ep = make_episode(tmp_path / "episode_0000", np.array([[[1.0, 2.0]]]), {})
+    meta = json.loads((ep / "meta.json").read_text())
+    del meta["format"]
+    (ep / "meta.json").write_text(json.dumps(meta))
+    out = export_episode(ep, tmp_path / "wt")
+    for n in (2, 5):
+        assert (out / "Image_subsets" / f"C{n}" / "00000000.png").read_bytes() == \
+            (ep / "frames" / f"cam{n:02d}" / "000000.png").read_bytes()
