@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from pathlib import Path
 
 import cv2
@@ -116,10 +117,14 @@ def read_people(path: str | os.PathLike) -> np.ndarray:
     radius, height), one row per person and frame: also for a single row or none. A file
     that cannot be parsed or lacks a column is a one-line ValueError naming it."""
     try:
-        table = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8", ndmin=1,
-                              usemask=True)          # masked: an empty field
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", "genfromtxt: Empty input file")
+            table = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8", ndmin=1,
+                                  usemask=True)          # masked: an empty field
     except ValueError as exc:               # "Some errors were detected !\n    Line #2 (got 4 columns ...)"
         raise ValueError(f"{path}: cannot read ({' '.join(str(exc).split())})") from None
+    except IndexError:                      # no line at all: genfromtxt looked for a header in vain
+        raise ValueError(f"{path}: no header line (expected {','.join(PEOPLE_DTYPE.names)})") from None
     found = table.dtype.names or ()
     for name in PEOPLE_DTYPE.names:
         if name not in found:

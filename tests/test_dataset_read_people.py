@@ -58,3 +58,15 @@ def test_a_value_that_is_not_a_position_is_one_line_naming_it(tmp_path, row, say
     with pytest.raises(ValueError) as err:
         read_people(path)
     assert str(err.value) == f"{path}: {says}"
+
+
+@pytest.mark.parametrize("text", ["", "\n\n"])
+def test_an_empty_file_is_one_line_naming_it(tmp_path, text, recwarn):
+    """An empty file raised IndexError from numpy (a traceback out of `camtask export`) after a
+    UserWarning "Empty input file"."""
+    path = tmp_path / "people.csv"
+    path.write_text(text)
+    with pytest.raises(ValueError) as err:
+        read_people(path)
+    assert str(err.value) == f"{path}: no header line (expected frame,person_id,x,y,radius,height)"
+    assert not recwarn.list
