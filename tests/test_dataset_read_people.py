@@ -43,6 +43,30 @@ def test_a_file_without_the_columns_is_one_line_naming_it(tmp_path):
     with pytest.raises(ValueError, match=r"people\.csv: no column 'frame'") as exc:
         read_people(path)
     assert "\n" not in str(exc.value)
+    path.write_text("frame,person_id,x,y,radius\n0,0,1,2,0.25\n")      # only the last one missing
+    with pytest.raises(ValueError) as exc:
+        read_people(path)
+    assert str(exc.value) == f"{path}: no column 'height' (expected the header frame,person_id,x,y,radius,height)"
+
+
+def test_values_come_back_as_written(tmp_path):
+    """Decimals that no binary fraction holds read back as the same float64, not a coarser float."""
+    path = tmp_path / "people.csv"
+    path.write_text(HEADER + "0,0,0.1,2.7,0.23,1.83\n")
+    assert read_people(path).tolist() == [(0, 0, 0.1, 2.7, 0.23, 1.83)]
+
+
+@pytest.mark.parametrize(("rows", "says"), [
+    ("0,0,abc,2,0.25,1.75\n", "column 'x': expected numbers, got text"),
+    ("0,0,nan,2,0.25,1.75\n0,1,,2,0.25,1.75\n", "column 'x', row 1: expected a finite number, got nan"),
+])
+def test_a_file_that_is_not_a_table_of_numbers_is_one_line_naming_it(tmp_path, rows, says):
+    """A word makes a column of text; the first bad row is named with its own value."""
+    path = tmp_path / "people.csv"
+    path.write_text(HEADER + rows)
+    with pytest.raises(ValueError) as err:
+        read_people(path)
+    assert str(err.value) == f"{path}: {says}"
 
 
 @pytest.mark.parametrize(("row", "says"), [
@@ -70,3 +94,13 @@ def test_an_empty_file_is_one_line_naming_it(tmp_path, text, recwarn):
         read_people(path)
     assert str(err.value) == f"{path}: no header line (expected frame,person_id,x,y,radius,height)"
     assert not recwarn.list
+
+
+def test_a_short_row_is_one_line_naming_the_file_and_the_line(tmp_path):
+    """numpy's message spans two lines: "Some errors were detected !\\n    Line #3 (got 3 columns ...)"."""
+    path = tmp_path / "people.csv"
+    path.write_text(HEADER + "0,0,1,2,0.25,1.75\n0,1,1\n")
+    with pytest.raises(ValueError) as err:
+        read_people(path)
+    assert str(err.value).startswith(f"{path}: cannot read (") and "Line #3 (got 3 columns" in str(err.value)
+    assert "\n" not in str(err.value)
