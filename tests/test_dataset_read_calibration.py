@@ -20,6 +20,14 @@ def test_round_trip(tmp_path):
     assert (c["width"], c["height"]) == (cam.width, cam.height)
 
 
+def test_the_arrays_have_the_documented_shapes(tmp_path):
+    """K (3, 3); dist, rvec and tvec flat (5,), (3,), (3,), as the file's 1x5 and 3x1 are not."""
+    write_calibration(tmp_path / "cam01.yaml", load_scene("lab").cameras[0])
+    c = read_calibration(tmp_path / "cam01.yaml")
+    assert [c[k].shape for k in ("K", "dist", "rvec", "tvec")] == [(3, 3), (5,), (3,), (3,)]
+    assert type(c["width"]) is int and type(c["height"]) is int
+
+
 def test_missing_file_is_one_line_naming_it(tmp_path):
     with pytest.raises(FileNotFoundError, match="cam05.yaml") as exc:
         read_calibration(tmp_path / "cam05.yaml")
