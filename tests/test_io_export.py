@@ -138,8 +138,10 @@ def test_an_episode_folder_that_is_a_link_is_checked_against_the_manifest_beside
     ({"cameras": []}, "cameras: expected a non-empty list of distinct camera numbers >= 1, got []"),
     ({"cameras": [1, True]}, "cameras: expected a non-empty list of distinct camera numbers >= 1, got [1, true]"),
     ({"scene_yaml": 5}, "scene_yaml: expected the scene file's text, got 5"),
+    ({"frames": 2.0}, "frames: expected an integer >= 1, got 2.0"),
+    ({"cameras": [1, 2.0]}, "cameras: expected a non-empty list of distinct camera numbers >= 1, got [1, 2.0]"),
 ])
-def test_read_meta_takes_no_booleans_for_counts_and_needs_a_camera(episode, change, message):
+def test_read_meta_takes_no_booleans_or_floats_for_counts_and_needs_a_camera(episode, change, message):
     from testbed.dataset import read_meta
 
     meta_with(episode, **change)
@@ -157,3 +159,36 @@ def test_read_meta_takes_an_episode_of_no_people_and_an_incomplete_one_when_aske
     assert sorted(read_meta(episode, complete=False)) == ["episode", "format", "people", "scene_yaml"]
     with pytest.raises(ValueError, match="no 'cameras'"):
         read_meta(episode)
+
+
+def test_read_meta_shows_a_long_value_cut_short(episode):
+    """A scene given as a parsed mapping, not its text, is shown by its first characters only."""
+    from testbed.dataset import read_meta
+
+    meta_with(episode, scene_yaml={"cameras": [{"number": n, "position": [1.0, 2.0, 3.0]} for n in range(16)]})
+    with pytest.raises(ValueError) as err:
+        read_meta(episode)
+    assert str(err.value).startswith(f"{episode / 'meta.json'}: scene_yaml: expected the scene file's text, "
+                                     'got {"cameras": [{"number": 0,')
+    assert len(str(err.value)) < len(str(episode)) + 150
+
+
+def test_read_meta_of_a_missing_or_unreadable_meta_json_names_it(episode):
+    """Named as other input files are: open() says "[Errno 2] No such file or directory" and
+    raises IsADirectoryError for a folder and UnicodeDecodeError for bytes not UTF-8."""
+    from testbed.dataset import read_meta
+
+    path = episode / "meta.json"
+    path.unlink()
+    with pytest.raises(FileNotFoundError) as err:
+        read_meta(episode)
+    assert str(err.value) == f"meta.json: no such file {str(path)!r}"
+    path.mkdir()
+    with pytest.raises(ValueError) as err:
+        read_meta(episode)
+    assert str(err.value) == f"meta.json: {str(path)!r} is a folder, not a file"
+    path.rmdir()
+    path.write_bytes(b'{"episode": 3, "scene_yaml": "caf\xe9"}')
+    with pytest.raises(ValueError) as err:
+        read_meta(episode, complete=False)
+    assert str(err.value) == f"meta.json: {str(path)!r} is not UTF-8 text (byte 0xe9 at offset 33)"
