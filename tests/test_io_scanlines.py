@@ -1,6 +1,7 @@
 """camtask scanlines: --video, --calibration and --background as their help and docs/pipeline.md say."""
 
 import argparse
+import json
 import re
 import shutil
 from pathlib import Path
@@ -243,3 +244,114 @@ def test_a_truncated_or_corrupt_video_is_one_line_naming_it(render_dir, tmp_path
                                          rf"{reason}.* \(truncated or corrupt\)$"):
         camtask(args)
     assert not out.exists() and " @ 0x" not in capfd.readouterr().err
+
+
+def test_the_json_names_the_parameters_and_the_file_of_the_run(render_dir, tmp_path, capsys):
+    """A video's scanlines.npz holds the number of its calibration's camera; --json prints
+    the parameters used (not the defaults) and the output file, and no progress bar."""
+    from pipeline import load_params
+
+    params = tmp_path / "p.yaml"
+    params.write_text("opening_kernel: 5\ncolumn_threshold: 2.5\n")
+    for argv in (["scanlines", str(render_dir)],
+                 ["scanlines", "--video", str(render_dir / "frames" / "cam02"), "--calibration",
+                  str(render_dir / "calibration" / "cam02.yaml"), "--background", "1"]):
+        out = tmp_path / "s.npz"
+        capsys.readouterr()
+        assert camtask(argv + ["--params", str(params), "--out", str(out), "--json"]) == 0
+        printed = capsys.readouterr()
+        assert printed.err == ""
+        m = json.loads(printed.out)
+        assert m["params"] == load_params(params).to_dict() and m["out"] == str(out)
+    assert np.load(out)["camera_numbers"].tolist() == [2]
+
+
+def test_a_video_of_one_background_frame_says_frame(render_dir, tmp_path):
+    folder = tmp_path / "one"
+    folder.mkdir()
+    shutil.copy(min((render_dir / "frames" / "cam01").iterdir()), folder)
+    with pytest.raises(ValueError, match=r"^--background 1: --video .*one has 1 frame; expected more than the 1 "
+                                         r"background frames$"):
+        camtask(["scanlines", "--video", str(folder), *video_args(render_dir, 1)[3:], "--out", str(tmp_path / "s.npz")])
+
+
+@pytest.mark.parametrize("size", [(160, 60), (80, 120)])
+def test_frames_as_wide_or_as_tall_as_the_calibration_are_still_refused(render_dir, tmp_path, size):
+    """Frames of the calibration's height but another width, or its width but another height."""
+    import cv2
+
+    folder = tmp_path / "frames"
+    shutil.copytree(render_dir / "frames" / "cam01", folder)
+    last = max(folder.iterdir())
+    cv2.imwrite(str(last), cv2.resize(cv2.imread(str(last)), size))
+    with pytest.raises(ValueError, match=rf"^--video: {re.escape(str(last))} is {size[0]} x {size[1]} pixels; "):
+        camtask(["scanlines", "--video", str(folder), *video_args(render_dir, 1)[3:],
+                 "--out", str(tmp_path / "s.npz")])
+    assert not (tmp_path / "s.npz").exists()
+
+
+def test_frames_with_two_equal_channels_only_are_not_grey(render_dir, tmp_path, capsys):
+    """R = G but B otherwise is a colour: no warning that the colour angle cannot tell pixels apart."""
+    import cv2
+
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for path in sorted((render_dir / "frames" / "cam01").iterdir()):
+        image = cv2.imread(str(path))
+        image[..., 1] = image[..., 2]                           # BGR: G = R, B as it was
+        cv2.imwrite(str(folder / path.name), image)
+    capsys.readouterr()
+    assert camtask(["scanlines", "--video", str(folder), *video_args(render_dir, 1)[3:],
+                    "--out", str(tmp_path / "s.npz"), "--json"]) == 0
+    assert "grey" not in capsys.readouterr().err
+
+
+def test_the_background_is_all_the_background_frames(render_dir, tmp_path):
+    """--background 3 makes the background model of the first three frames, not of the first alone."""
+    from pipeline import Pipeline, PipelineParams
+    from pipeline.io import iter_video_frames, load_calibration
+    from pipeline.runs import run_sequence
+
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    frames = sorted((render_dir / "frames" / "cam01").iterdir())
+    for k, path in enumerate([frames[1], render_dir / "background" / "cam01.png",
+                              render_dir / "background" / "cam01.png", *frames]):
+        shutil.copy(path, folder / f"{k:02d}.png")
+    out = tmp_path / "s.npz"
+    assert camtask(["scanlines", "--video", str(folder), *video_args(render_dir, 3)[3:],
+                    "--out", str(out), "--json"]) == 0
+    images = np.stack(list(iter_video_frames(folder)))
+    pipe = Pipeline([load_calibration(render_dir / "calibration" / "cam01.yaml")], PipelineParams(),
+                    images[:3, None])
+    expected = run_sequence(pipe, images[3:, None]).scanlines
+    assert expected.any()
+    np.testing.assert_array_equal(np.load(out)["scanlines"], expected)
+
+
+def test_the_table_prints_each_cameras_metrics_and_their_totals(render_dir, tmp_path, capsys):
+    """Without --json: a row per camera (its number, then precision, recall, F1, PWC and pixel
+    F1), a row of all of them and the pixels' metrics, as --json gives them."""
+    out = tmp_path / "s.npz"
+    capsys.readouterr()
+    assert camtask(["scanlines", str(render_dir), "--out", str(out), "--json"]) == 0
+    m = json.loads(capsys.readouterr().out)
+    assert camtask(["scanlines", str(render_dir), "--out", str(out)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == f"4 frames x 2 cameras -> {out}"
+    assert re.fullmatch(r"bandwidth: RLE ([\d.]+) bits per scanline on average \(max (\d+)\), raw 160",
+                        lines[1]).groups() == (f"{m['rle_bits_mean']:.1f}", str(m["rle_bits_max"]))
+    assert lines[2].split() == ["camera", "precision", "recall", "F1", "PWC", "pixel", "F1"]
+    rows = [(c["precision"], c["recall"], c["f1"], c["pwc"], px["f1"])
+            for c, px in zip(m["per_camera"], m["pixel"]["per_camera"])]
+    rows.append((m["precision"], m["recall"], m["f1"], m["pwc"], m["pixel"]["f1"]))
+    assert len(lines) == 7
+    printed = 5e-4 + 1e-9, 5e-4 + 1e-9, 5e-4 + 1e-9, 5e-3 + 1e-9, 5e-4 + 1e-9     # to 3 decimals, PWC to 2
+    for line, name, row in zip(lines[3:6], ["1", "2", "all"], rows):
+        assert line.split()[0] == name
+        assert np.all(np.abs(np.array(line.split()[1:], float) - row) <= printed), (line, row)
+    px = m["pixel"]
+    words = lines[6].split()
+    assert words[0] == "pixels:" and words[1::2] == ["precision", "recall", "F1", "PWC"]
+    assert np.all(np.abs(np.array(words[2::2], float) - [px["precision"], px["recall"], px["f1"], px["pwc"]])
+                  <= [5e-4 + 1e-9] * 3 + [5e-3 + 1e-9]), (lines[6], px)
