@@ -219,10 +219,11 @@ def test_the_people_size_is_the_shortest_and_the_thinnest_persons(render_dir, tm
     _assert_sight_range_of(root, tmp_path / "s.npz", height=1.5, width=0.4)
 
 
-def test_a_meta_json_without_a_scene_gives_no_people_size(render_dir, tmp_path, capsys):
+@pytest.mark.parametrize("meta", ['{"episode": 0}', '{"scene_yaml": ""}', '{"scene_yaml": null}'])
+def test_a_meta_json_without_a_scene_gives_no_people_size(render_dir, tmp_path, capsys, meta):
     root = tmp_path / "render"
     shutil.copytree(render_dir, root)
-    (root / "meta.json").write_text('{"episode": 0}')
+    (root / "meta.json").write_text(meta)
     assert main_line(capsys, ["scanlines", str(root), "--frames", "1", "--out", str(tmp_path / "s.npz")])[0] == 0
     assert "blind_radius" not in np.load(tmp_path / "s.npz").files
 
@@ -239,6 +240,17 @@ def test_a_render_directory_beside_a_manifest_json_of_its_own_is_still_one(rende
     shutil.copytree(render_dir, root)
     (root / "manifest.json").write_text("{}")
     assert main_line(capsys, ["scanlines", str(root), "--out", str(tmp_path / "s.npz"), "--json"])[0] == 0
+    assert np.load(tmp_path / "s.npz")["scanlines"].shape == (4, 2, 160)
+
+
+def test_files_named_episode_beside_the_one_episode_are_no_episodes(render_dir, fake_dataset, tmp_path, capsys):
+    """A dataset's folder holds other files named episode_* (a stopped run's episode_best.yaml):
+    its one episode folder is still the one."""
+    (fake_dataset / "episode_0000").rmdir()
+    shutil.copytree(render_dir, fake_dataset / "episode_0001")
+    (fake_dataset / "episode_0000.yaml").write_text("{}\n")
+    (fake_dataset / "episode_best.yaml").write_text("{}\n")
+    assert main_line(capsys, ["scanlines", str(fake_dataset), "--out", str(tmp_path / "s.npz"), "--json"]) == (0, [])
     assert np.load(tmp_path / "s.npz")["scanlines"].shape == (4, 2, 160)
 
 
@@ -261,6 +273,23 @@ def test_the_default_output_in_an_episode_of_a_dataset_asks_for_out(render_dir, 
         2, [(f"camtask {command[0]}: error: --out: {episode} is an episode of the dataset {fake_dataset}, whose "
             f"manifest.json checksums its files; give --out FILE to write {name} elsewhere")])
     assert sorted(p.relative_to(fake_dataset) for p in fake_dataset.rglob("*")) == before
+
+
+@pytest.mark.parametrize(("command", "name"), [(["scanlines"], "scanlines.npz"),
+                                               (["tune", "--trials", "1"], "tuned_params.yaml")])
+def test_an_episode_named_relatively_names_its_dataset_so(render_dir, fake_dataset, tmp_path, capsys, monkeypatch,
+                                                            command, name):
+    """The dataset is named as the user named the episode: ds for ds/episode_0000; for "."
+    (which names no folder) by its real path."""
+    episode = fake_dataset / "episode_0000"
+    episode.rmdir()
+    shutil.copytree(render_dir, episode)
+    tail = f"whose manifest.json checksums its files; give --out FILE to write {name} elsewhere"
+    for cwd, given, dataset in ((tmp_path, "ds/episode_0000", "ds"), (episode, ".", fake_dataset.resolve())):
+        monkeypatch.chdir(cwd)
+        assert main_line(capsys, [command[0], given, *command[1:]]) == (
+            2, [f"camtask {command[0]}: error: --out: {given} is an episode of the dataset {dataset}, {tail}"])
+    assert sorted(p.name for p in episode.iterdir()) == sorted(p.name for p in render_dir.iterdir())
 
 
 def test_a_video_without_json_prints_its_frames_and_bandwidth_only(render_dir, tmp_path, capsys):
