@@ -337,7 +337,9 @@ def test_the_table_prints_each_cameras_metrics_and_their_totals(render_dir, tmp_
     assert camtask(["scanlines", str(render_dir), "--out", str(out), "--json"]) == 0
     m = json.loads(capsys.readouterr().out)
     assert camtask(["scanlines", str(render_dir), "--out", str(out)]) == 0
-    lines = capsys.readouterr().out.splitlines()
+    printed = capsys.readouterr()
+    assert "4/4" in printed.err                                  # the progress bar counts to the frames
+    lines = printed.out.splitlines()
     assert lines[0] == f"4 frames x 2 cameras -> {out}"
     assert re.fullmatch(r"bandwidth: RLE ([\d.]+) bits per scanline on average \(max (\d+)\), raw 160",
                         lines[1]).groups() == (f"{m['rle_bits_mean']:.1f}", str(m["rle_bits_max"]))

@@ -292,6 +292,17 @@ def test_an_episode_named_relatively_names_its_dataset_so(render_dir, fake_datas
     assert sorted(p.name for p in episode.iterdir()) == sorted(p.name for p in render_dir.iterdir())
 
 
+def test_a_render_directory_inside_an_episode_is_no_episode(render_dir, fake_dataset, capsys):
+    """Its default output is refused as a file inside the episode, not called an episode itself."""
+    inner = fake_dataset / "episode_0000" / "render"
+    shutil.copytree(render_dir, inner)
+    assert main_line(capsys, ["scanlines", str(inner)]) == (
+        2, [(f"camtask scanlines: error: --out: {inner / 'scanlines.npz'} is inside {fake_dataset / 'episode_0000'}, "
+             f"an episode of the dataset {fake_dataset}, whose manifest.json checksums its files; choose a folder "
+             "outside that dataset")])
+    assert not (inner / "scanlines.npz").exists()
+
+
 def test_a_video_without_json_prints_its_frames_and_bandwidth_only(render_dir, tmp_path, capsys):
     """No ground truth for a video: no table of precision and recall."""
     out = tmp_path / "s.npz"
