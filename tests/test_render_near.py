@@ -163,3 +163,37 @@ def test_one_person_covering_the_lens_is_drawn_unclipped_beside_others():
     with Renderer(_scene(count=2), cameras=[3]) as r:
         labels = r.labels(np.array([[3.905, 0.27], [2.0, 4.0]]))
     assert (labels == 1).all()
+
+
+def _other_lenses(lab, **people):
+    """The lab with camera 2's principal point moved and fy 15 % above fx, and camera 3's
+    distortion stronger; ``people`` replaces fields of the people."""
+    import dataclasses
+
+    c = lab.cameras
+    K = c[1].K.copy()
+    K[1, 1] *= 1.15
+    K[:2, 2] += [-150.0, 90.0]
+    dist = np.array([-0.3, 0.12, 0.0, 0.0, 0.0])
+    cameras = (c[0], dataclasses.replace(c[1], K=K), dataclasses.replace(c[2], dist=dist), *c[3:])
+    return dataclasses.replace(lab, cameras=cameras, people=dataclasses.replace(lab.people, **people))
+
+
+def test_close_takes_each_cameras_own_reach_and_the_distance_over_the_heads(lab):
+    """Cameras of three lenses (their farthest near-plane corners differ, one with fy != fx),
+    2.2 m high over people 2.17 m tall: close when the lens is within its own camera's reach
+    of the cylinder, measured straight to its top rim (3 cm up, the rest sideways)."""
+    from render import Renderer
+
+    scene = _other_lenses(lab, height=2.17)
+    with Renderer(scene, cameras=[1, 2, 3]) as r:
+        reach = [_near_plane_reach(r, k) for k in range(3)]
+        assert max(reach) - min(reach) > 0.005
+        for k in range(3):
+            cam = r.cameras[k]
+            up = cam.center_world[2] - scene.people.height
+            ahead = np.array([np.cos(cam.yaw), np.sin(cam.yaw)])
+            for f, close in [(0.999, True), (1.001, False)]:
+                side = np.sqrt((f * reach[k]) ** 2 - up**2)
+                pos = (cam.center_world[:2] + (scene.people.radius + side) * ahead)[None]
+                assert r._close(np.array([k]), pos).tolist() == [[close]], (k, f)
