@@ -266,6 +266,22 @@ def test_frames_without_noise_still_take_the_gain(three_people):
     assert np.mean(f.rgb == expected) > 0.99
 
 
+def test_a_gain_clipped_to_zero_gives_a_black_frame(three_people):
+    """gain_jitter 1.0 draws gains below 0, clipped to 0 (seed 5: 0.198 and 0 for cameras
+    1 and 6): no light, a black frame, not the clean one (a 160x120 lab)."""
+    from render import Renderer
+    from scene import Scene, scene_path
+
+    text = scene_path("lab").read_text().replace("noise_std: 2.0 ", "noise_std: 0.0 ").replace(
+        "gain_jitter: 0.02 ", "gain_jitter: 1.0 ").replace("resolution: [640, 480]", "resolution: [160, 120]")
+    with Renderer(Scene.from_text(text.replace("[322.4, 236.8]", "[80.6, 59.2]")), cameras=[1, 6]) as r:
+        f = r.render(three_people, rng=np.random.default_rng(5))
+        clean = r.render(three_people, clean=True).rgb
+    assert np.clip(1.0 + np.random.default_rng(5).standard_normal(2), 0.0, None)[1] == 0.0
+    assert clean[1].mean() > 50 and not f.rgb[1].any()
+    assert 0 < f.rgb[0].mean() < 0.25 * clean[0].mean()
+
+
 def test_a_skewed_camera_equals_the_reference(lab):
     """OpenCV and the OpenGL projection leave out the skew K[0, 1], so the people's canvas
     boxes must too: shifted by the skew (up to 14 px here), they left out pixels of people
