@@ -392,8 +392,10 @@ def test_raster_checks_its_arguments():
 
 
 def test_positions_of_another_shape_are_refused_not_reshaped(lab_renderer, three_people):
-    """(2, 3) - the x row and the y row - or a flat (6,) used to be read as three (x, y) pairs."""
-    for wrong in (three_people.T.copy(), three_people.ravel(), three_people[None]):
+    """(2, 3) - the x row and the y row - or a flat (6,) used to be read as three (x, y) pairs;
+    (3, 3) rows are not (x, y) pairs either."""
+    for wrong in (three_people.T.copy(), three_people.ravel(), three_people[None],
+                  np.column_stack([three_people, np.zeros(3)])):       # (3, 3): x, y, z
         with pytest.raises(ValueError, match=rf"^positions_xy: expected shape \(3, 2\), got {re.escape(str(wrong.shape))}$"):
             lab_renderer.render(wrong, clean=True)
         with pytest.raises(ValueError, match=r"^positions_xy: expected shape \(3, 2\)"):
@@ -423,3 +425,21 @@ def test_a_scene_of_floor_plane_cameras_is_not_rendered():
 
     with pytest.raises(ValueError, match=r"^scene: 'circle' has floor-plane cameras only; rendering needs calibrated"):
         Renderer(load_scene("circle"))
+
+
+def test_cameras_of_two_image_sizes_are_not_rendered_together(lab):
+    """One canvas and one frame size for all: refused before any GL work, naming both sizes."""
+    import dataclasses
+
+    from render import Renderer
+
+    c = lab.cameras
+    K = c[1].K.copy()
+    K[:2] /= 2
+    small = dataclasses.replace(c[1], K=K, width=320, height=240)
+    scene = dataclasses.replace(lab, cameras=(c[0], small, *c[2:]))
+    with pytest.raises(ValueError, match=r"^cameras: expected one image size for all rendered cameras, "
+                                         r"got \[\(320, 240\), \(640, 480\)\]$"):
+        Renderer(scene)
+    with pytest.raises(ValueError, match="one image size"):
+        Renderer(scene, cameras=[2, 5])
