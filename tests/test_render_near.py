@@ -67,10 +67,13 @@ def test_a_person_nearer_than_the_near_plane_fills_the_image(low, gap):
 def test_inside_a_person_near_its_surface_looking_out(low, number, gap):
     """The surface the camera looks out through is nearer than the near plane. For the
     level camera 3 and a gap under 5 cm every vertex of the person is nearer than it too:
-    its canvas box is the whole canvas all the same."""
+    its canvas box is the whole canvas all the same (``_rects`` finds it close by itself)."""
     scene, r = low
-    labels = r.labels(_ahead(scene, number, gap - scene.people.radius), cameras=[number])
+    pos = _ahead(scene, number, gap - scene.people.radius)
+    labels = r.labels(pos, cameras=[number])
     assert (labels == 1).all()
+    k = r.numbers.index(number)
+    assert r._rects(np.array([k]), pos).tolist() == [[[-np.inf, -np.inf, np.inf, np.inf]]]
 
 
 def test_fast_path_equals_the_whole_scene_draw_for_a_camera_inside(low):
