@@ -44,6 +44,14 @@ def test_label_mask_matches_projected_silhouette(lab, lab_renderer, tmp_path, nu
     assert iou > 0.95, iou
 
 
+def test_masks_are_where_any_person_is():
+    from render.renderer import Frames
+
+    labels = np.array([[[0, 1, 0], [3, 0, 254]]], np.uint8)
+    f = Frames(np.zeros((1, 2, 3, 3), np.uint8), labels, (4,))
+    assert f.masks.tolist() == [[[False, True, False], [True, False, True]]]
+
+
 def test_same_seed_same_frames_different_seed_different_noise(lab, lab_renderer, three_people):
     a = lab_renderer.render(three_people, cameras=[3, 9], rng=np.random.default_rng(5))
     b = lab_renderer.render(three_people, cameras=[3, 9], rng=np.random.default_rng(5))
