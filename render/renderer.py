@@ -62,8 +62,9 @@ def far_plane(scene: Scene) -> float:
     bounding box, from the floor to the ceiling or the people's heads (whichever is
     higher) and widened by the people's radius, and at least :data:`ZFAR_MIN`: nothing
     inside the room is ever clipped, whatever the scene's size or unit. It depends on
-    all the scene's cameras, not on those a renderer prepares, so a camera's pixels do
-    not depend on which others are rendered. With the near plane fixed at :data:`ZNEAR`
+    all the scene's cameras, not on those a renderer prepares, so a camera's depth values
+    do not depend on which others are rendered (its colours do a little, through its band
+    in the framebuffer: docs/render.md). With the near plane fixed at :data:`ZNEAR`
     the depth step at distance d is about d**2 / (ZNEAR * 2**24) whatever the far plane
     (0.1 mm at 9 m, 4 mm at 60 m), so a generous far plane costs no depth precision.
 
