@@ -25,3 +25,24 @@ def test_run_shows_the_walk_as_it_is_drawn(monkeypatch, capsys):
     assert truth.shape == (50, 3, 2)
     err = capsys.readouterr().err
     assert "\rwalk: " in err and "/50 [" in err        # shown, then cleared for the frames' bar
+
+
+def test_the_walk_s_bar_counts_every_frame_and_is_cleared(monkeypatch, capsys):
+    """The bar starts at the first frame (the people's drop) and counts each step after it."""
+    import tqdm
+
+    ended = []
+
+    class Counted(tqdm.tqdm):
+        def close(self):
+            ended.append((self.n, self.total))
+            super().close()
+
+    monkeypatch.setattr(tqdm, "tqdm", Counted)
+    monkeypatch.setattr(run_command, "WALK_BAR_DELAY", 0)
+    ns = argparse.Namespace(scene="lab", tasker="incremental", k=6, m=1, update_every=1, feedback="hull",
+                            near_field=True, frames=40, people=2, params=None, seed=3, video=None)
+    run_command.prepare(ns)
+    assert ended[0] == (40, 40)
+    err = capsys.readouterr().err
+    assert err.endswith("\r") and "\n" not in err          # cleared, its line left to the frames' bar
