@@ -148,11 +148,13 @@ def test_video_tiles_show_the_columns_of_the_scanlines_under_them(monkeypatch):
 
     def mosaic(frames, scanlines, tasked, width):
         tiled.update(frames=frames, scanlines=scanlines)
-        return np.zeros((10, width, 3), np.uint8)
+        return np.full((10, width, 3), 7, np.uint8)
 
     monkeypatch.setattr(topview, "mosaic", mosaic)
     source = SimpleNamespace(pipes=pipes, bearings={n: p.bearings[0] for n, p in pipes.items()})
-    _painter(scene, source)(result)
+    painted = _painter(scene, source)(result)
+    assert np.all(painted[:10] == 7)                         # the tiles, then the top view under them
+    assert np.array_equal(painted[10:], TopView(scene, width=720).draw(result, source.bearings))
     assert np.array_equal(tiled["scanlines"], scans)
     assert len(tiled["frames"]) == 2
     for frame, scan in zip(tiled["frames"], scans):
