@@ -1,11 +1,12 @@
-"""pipeline.runs.run_sequence: a run starts from its first frame, labels pair with frames."""
+"""pipeline.runs.run_sequence: a run starts from its first frame, labels pair with frames;
+scanline_f1: the pooled F1 of other parameters."""
 
 import numpy as np
 import pytest
 
 import scene
 from pipeline import Pipeline, PipelineParams
-from pipeline.runs import run_sequence
+from pipeline.runs import run_sequence, scanline_f1
 from pipeline.synthetic import synthetic_sequence
 
 
@@ -95,3 +96,30 @@ def test_a_run_of_no_frames_is_refused(sequence):
     cams, bg, *_ = sequence
     with pytest.raises(ValueError, match=r"^frames: expected at least one frame after the background$"):
         run_sequence(Pipeline(cams, PipelineParams(column_threshold=3.0), bg), [])
+
+
+def test_a_runs_bearings_are_its_columns_bearings(sequence):
+    """Each camera's columns sweep its 49 degree field of view, right to left, the middle one
+    along its heading (70 and 110 degrees)."""
+    cams, bg, frames, labels = sequence
+    pipe = Pipeline(cams, PipelineParams(column_threshold=3.0), bg)
+    bearings = run_sequence(pipe, frames[:2], labels[:2]).bearings
+    np.testing.assert_array_equal(bearings, Pipeline(cams).bearings)
+    deg = np.degrees(bearings)
+    assert np.all(np.diff(deg, axis=1) < 0)
+    assert deg[:, 0] - deg[:, -1] == pytest.approx([49, 49], abs=0.5)
+    assert deg[:, 80] == pytest.approx([70, 110], abs=0.5)
+
+
+def test_scanline_f1_is_the_pooled_f1_of_the_params_given(sequence):
+    """2 TP / (2 TP + FP + FN) over every frame, camera and column, of the parameters given,
+    not the pipeline's own; here precision (0.81) is not recall (0.99)."""
+    cams, bg, frames, labels = sequence
+    base = Pipeline(cams, PipelineParams(column_threshold=10.0), bg)
+    gts = np.stack([base.ground_truth(lab)[1] for lab in labels])
+    params = PipelineParams(column_threshold=3.0, temporal_alpha=0.5)
+    plain = Pipeline(cams, params, bg)
+    pred = np.stack([plain.process(f) for f in frames])
+    tp, fp, fn = np.sum(pred & gts), np.sum(pred & ~gts), np.sum(~pred & gts)
+    assert tp / (tp + fp) < 0.9 < tp / (tp + fn)
+    assert scanline_f1(base, np.asarray(frames), gts, params) == pytest.approx(2 * tp / (2 * tp + fp + fn), abs=1e-12)
