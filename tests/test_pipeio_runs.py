@@ -77,7 +77,11 @@ def test_a_runs_metrics_are_its_frames_counted_plainly(sequence):
     assert pixels[:, 0].min() > 0 and pixels[:, 1:3].sum() > 0                # people found, and some misses
     np.testing.assert_array_equal(result.pixel_counts, pixels)
     assert [m["pixel"][k] for k in ("tp", "fp", "fn", "tn")] == pixels.sum(0).tolist()
-    assert [c["recall"] for c in m["pixel"]["per_camera"]] == pytest.approx(pixels[:, 0] / (pixels[:, 0] + pixels[:, 2]))
+    for got, (tp, fp, fn, tn) in zip(m["pixel"]["per_camera"] + [m["pixel"]], [*pixels, pixels.sum(0)]):
+        assert {k: got[k] for k in ("recall", "precision", "f1", "pwc", "specificity")} == pytest.approx(
+            {"recall": tp / (tp + fn), "precision": tp / (tp + fp), "f1": 2 * tp / (2 * tp + fp + fn),
+             "pwc": 100 * (fp + fn) / (tp + fp + fn + tn), "specificity": tn / (tn + fp)})
+    assert len(m["pixel"]["per_camera"]) == 2
 
 
 def test_a_run_without_labels_has_no_truth_and_reports_each_frame(sequence):
