@@ -1,6 +1,8 @@
 """Output files given as symbolic links are written through, atomically beside the target."""
 
+import errno
 import os
+import re
 
 import numpy as np
 import pytest
@@ -38,8 +40,9 @@ def test_write_atomic_through_a_chain_and_a_dangling_link(tmp_path):
 def test_write_atomic_refuses_a_loop_of_links_in_one_line(tmp_path):
     os.symlink("b", tmp_path / "a")
     os.symlink("a", tmp_path / "b")
-    with pytest.raises(OSError, match=r"^cannot write .*a: Too many levels of symbolic links$"):
+    with pytest.raises(OSError, match=r"^cannot write .*a: Too many levels of symbolic links$") as info:
         write_atomic(tmp_path / "a", b"x")
+    assert info.value.errno == errno.ELOOP
     assert os.readlink(tmp_path / "a") == "b" and sorted(os.listdir(tmp_path)) == ["a", "b"]
 
 
@@ -47,6 +50,36 @@ def test_write_atomic_leaves_the_target_when_writing_fails(link, tmp_path):
     with pytest.raises(TypeError):
         write_atomic(link, "not bytes")
     assert (tmp_path / "data" / "real.yaml").read_text() == "old" and link.is_symlink()
+    assert sorted(os.listdir(tmp_path / "data")) == ["real.yaml"]
+
+
+def test_write_atomic_writes_a_hidden_temporary_beside_the_target(link, tmp_path):
+    """In the target's folder, not the link's (a rename cannot cross file systems), and
+    hidden from listings until it is renamed."""
+    seen = []
+
+    def pieces():
+        yield b"ne"
+        seen.append((sorted(os.listdir(tmp_path / "data")), os.listdir(tmp_path / "out")))
+        yield b"w"
+
+    write_atomic(link, pieces())
+    (tmp, real), out = seen[0]
+    assert re.fullmatch(r"\.real\.yaml\..+\.tmp", tmp) and real == "real.yaml" and out == ["link.yaml"]
+    assert (tmp_path / "data" / "real.yaml").read_bytes() == b"new"
+
+
+def test_a_full_disk_names_the_link_written_through(link, tmp_path, monkeypatch):
+    """The path as given, as open(link, "w") names it, in one error not chained onto the one caught."""
+    def full(src, dst):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "replace", full)
+    with pytest.raises(OSError) as info:
+        write_atomic(link, b"new")
+    assert str(info.value) == f"cannot write {link}: No space left on device"
+    assert info.value.__cause__ is None and info.value.__suppress_context__
+    assert (tmp_path / "data" / "real.yaml").read_text() == "old"
     assert sorted(os.listdir(tmp_path / "data")) == ["real.yaml"]
 
 
