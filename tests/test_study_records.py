@@ -78,6 +78,11 @@ def test_parse_ints_sorts_merges_and_bounds_ranges():
     # a negative number is a number below the minimum, not a malformed range
     with pytest.raises(ValueError, match=r"^--k: expected integers >= 1, got -3$"):
         core.parse_ints("k", "2,-3")
+    with pytest.raises(ValueError, match=r"^--k: expected integers >= 1, got -3$"):
+        core.parse_ints("k", "2, -3")                               # after a space, too
+    # of several numbers below the minimum, the error names the smallest
+    with pytest.raises(ValueError, match=r"^--k: expected integers >= 1, got -7$"):
+        core.parse_ints("k", "0,-7,-2,3")
     with pytest.raises(ValueError, match=r"^--cameras: expected integers >= 2, got 1$"):
         core.parse_ints("cameras", "1,3,5", minimum=2)
     assert core.parse_ints("cameras", "2", minimum=2) == [2]
@@ -87,6 +92,8 @@ def test_parse_names_keeps_order_drops_duplicates_and_refuses_an_empty_list():
     assert core.parse_names("taskers", " greedy,uniform, greedy ,", core.TASKERS) == ["greedy", "uniform"]
     with pytest.raises(ValueError, match=r"^--taskers: expected a comma-separated list, got ' , '$"):
         core.parse_names("taskers", " , ", core.TASKERS)
+    with pytest.raises(ValueError, match=r"^--taskers: unknown value 'best'; expected one of uniform, "):
+        core.parse_names("taskers", "greedy,best", core.TASKERS)
 
 
 def test_crowding_renames_only_the_drops_errors():
@@ -95,6 +102,8 @@ def test_crowding_renames_only_the_drops_errors():
     # any other error passes unchanged
     with pytest.raises(ValueError, match=r"^speed: too fast$"), core.crowding(7, 0.25):
         raise ValueError("speed: too fast")
+    with pytest.raises(ValueError, match=r"^speed: radii: too fast$"), core.crowding(7, 0.25):
+        raise ValueError("speed: radii: too fast")
 
 
 def test_mean_and_standard_error():
@@ -131,6 +140,9 @@ def test_bounds_of_the_shared_checks():
         with pytest.raises(ValueError, match=r"^--radius: expected a number in \(0, 0\.5\)"):
             core.check_discs(1, radius)
     assert core.check_discs(1, 0.499) == 0.499
+    assert core.check_discs(99, 0.1) == 0.1
+    with pytest.raises(ValueError, match=r"^--objects: 100 discs of radius 0\.1 do not fit"):
+        core.check_discs(100, 0.1)
     assert core.check_m(None, [3, 2]) == 1 and core.check_m(2, [3, 2]) == 2 and core.check_m(None, []) is None
     with pytest.raises(ValueError, match="smallest incremental k = 2, got 3"):
         core.check_m(3, [3, 2])
@@ -141,6 +153,18 @@ def test_bounds_of_the_shared_checks():
     assert core.parse_k("2,4", 4, "the 4 candidates") == [2, 4]
     with pytest.raises(ValueError, match=r"^--k: 5 cameras exceed the 4 candidates$"):
         core.parse_k("2,5", 4, "the 4 candidates")
+    with pytest.raises(ValueError, match=r"^--k: expected integers >= 1, got 0$"):
+        core.parse_k("0,2", 4, "the 4 candidates")
+
+
+def test_the_shared_checks_return_plain_python_numbers():
+    """What they return goes into the records' JSON, which takes no numpy scalar."""
+    for value in (core.check_bounded("speed", np.float32(0.5), 0.0, 100.0), core.check_bounded("dt", 2, 0.0, 1000.0),
+                  core.check_discs(1, np.float32(0.25))):
+        assert type(value) is float
+    for value in (core.check_count("steps", np.int64(3)), core.check_m(np.int64(2), [3]),
+                  core.check_period(np.int64(2), 4, ["greedy"])):
+        assert type(value) is int
 
 
 def test_tasker_table_rows_go_up_in_k():
