@@ -46,6 +46,7 @@ def test_a_shared_option_has_one_help_in_every_study(capsys, monkeypatch):
                  if option in h and (name, option) != ("cameras", "--objects")}    # a list there
         assert len(texts) == 1, (option, texts)
     assert "metres" in helps["tracking"]["--radius"] and "m/s" in helps["tracking"]["--speed"]
+    assert helps["tracking"]["--steps"].endswith("(default 150, 20 s)")
     assert "every tasker but uniform" in helps["tracking"]["--update-every"]
     assert "every tasker but uniform" in helps["lab"]["--update-every"]
     assert "incremental" in helps["moving"]["--update-every"]

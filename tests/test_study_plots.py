@@ -152,6 +152,10 @@ def test_static_and_lab_figures_draw_each_tasker_and_the_all_camera_reference(dr
     assert sorted(legend_labels(fig13)) == ["all 16 cameras", "greedy", "uniform"]
     greedy = next(c for c in fig8.containers if c.get_label() == "greedy")
     assert greedy.lines[0].get_xdata().tolist() == [2, 4] and greedy.lines[0].get_ydata().tolist() == [1.5, 0.75]
+    # each point's bar spans one standard error either side
+    (bars,) = greedy.lines[2]
+    np.testing.assert_allclose([seg[:, 1] for seg in bars.get_segments()], [[1.4, 1.6], [0.65, 0.85]])
+    assert (fig8.get_title(), fig8.get_ylabel()) == ("Fig. 8: taskers with static objects", "residual / object area")
     (reference,) = [line for line in fig13.get_lines() if line.get_label() == "all 16 cameras"]
     assert reference.get_linestyle() == "--" and set(reference.get_ydata()) == {1.25}
 
