@@ -1,5 +1,6 @@
 """`camtask study ...` end to end on tiny runs: tables, JSON schema, plots, errors, Dask."""
 
+import importlib
 import json
 
 import pytest
@@ -33,6 +34,9 @@ def test_cameras_json_schema_and_plot(capsys, tmp_path):
     assert png.stat().st_size > 1000
     assert doc["meta"]["seed"] == 5 and doc["meta"]["trials"] == 3
     assert doc["meta"]["arguments"]["objects"] == [1, 3]
+    # the package the taskers come from, by its import name
+    from testbed.studies import core
+    assert importlib.import_module(doc["meta"]["tasking_backend"]).TASKERS is core.TASKERS
     recs = doc["records"]
     assert len(recs) == 2 * (4 + 1)
     for r in recs:

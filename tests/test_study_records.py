@@ -59,6 +59,13 @@ def test_circle_cameras_face_the_centre_on_a_circle_of_their_radius():
     assert np.all((yaw >= 0) & (yaw < 2 * np.pi))
 
 
+def test_circle_room_is_a_720_gon_on_the_circle_of_its_radius():
+    for radius in (1.0, 2.5):
+        xy = np.asarray(core.circle_room(radius).exterior.coords)[:-1]
+        assert len(xy) == 720
+        np.testing.assert_allclose(np.hypot(xy[:, 0], xy[:, 1]), radius, atol=1e-12)
+
+
 def test_the_trial_generator_is_the_documented_seed_sequence():
     for seed, key in ((0, (0, 3, 7)), (5, (2, 0, 1)), (2**32 - 1, (1, 4, 2, 9))):
         assert core.trial_rng(seed, *key).random(4).tolist() == doc_rng(seed, *key).random(4).tolist()
