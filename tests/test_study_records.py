@@ -79,6 +79,8 @@ def test_parse_ints_sorts_merges_and_bounds_ranges():
     assert len(core.parse_ints("k", "1-100000")) == 100_000         # MAX_RANGE values: allowed
     with pytest.raises(ValueError, match=r"^--k: a range of at most 100000 values, got '1-100001'$"):
         core.parse_ints("k", "1-100001")
+    with pytest.raises(ValueError, match=r"^--k: a range of at most 100000 values, got '1-100001'$"):
+        core.parse_ints("k", "2, 1-100001,5")                       # the range named alone
     for text in ("5-2", "3-2"):                                     # a range downwards, even by one
         with pytest.raises(ValueError, match=rf"^--k: expected integers like '2,3,4' or '2-8', got '{text}'$"):
             core.parse_ints("k", text)
