@@ -1,5 +1,7 @@
 """The exact infinite-camera limit (testbed/studies/limit.py) against many cameras."""
 
+import warnings
+
 import numpy as np
 import pytest
 import shapely
@@ -249,6 +251,8 @@ def test_the_curves_numbers_are_the_row_segments_ends():
             assert (x > c[disc % m, 0]) == (disc >= m)          # on that half: left (< m) or right
     assert touched == 2 * len(curves.lines)          # each line touches two discs, each on one half
     assert curves.contact_y(0, 1) is None and curves.contact_y(4 * m, 4 * m + 2) is None
+    # a disc's half touches no curve but a line: not its other half, its extents nor the room
+    assert all(curves.contact_y(disc, k) is None for disc in range(2 * m) for k in range(4 * m + 2))
 
 
 def test_a_corner_is_two_curves_crossing_between_the_rows_beside_the_shared_one():
@@ -265,3 +269,90 @@ def test_a_corner_is_two_curves_crossing_between_the_rows_beside_the_shared_one(
     assert not _corner((4, 2), (4, 3), -0.1, -0.05, curves)       # 2 and 3 cross above both rows
     assert not _corner((5, 2), (5, 3), -0.1, 0.1, curves)         # the shared curve crosses them
     assert not _corner((4, 2), (5, 3), -0.1, 0.1, curves)         # no curve shared
+
+
+def test_a_point_on_a_lone_discs_circle_is_covered_and_its_centre_warns_nothing():
+    # every line through a point of the circle meets the (closed) disc; at the centre the
+    # angular radius is a quarter turn without a division by zero
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = covered(np.array([[0.1, 0.0], [0.0, -0.1], [0.0, 0.0]]), np.zeros((1, 2)), np.array([0.1]))
+    assert got.tolist() == [True, True, True]
+
+
+def test_two_discs_cover_every_line_through_a_point_in_the_pocket_beside_their_gap():
+    """Discs at (-0.105, 0) and (0.105, 0), 1 cm apart: from (-0.05, 0.09) the first blocks the
+    line directions -12.8 to 130 degrees, the second 116 to 183.8 degrees, all of them; from
+    (0, 0.09) both are seen around 30 and 150 degrees, leaving 80-100 degrees open."""
+    c = np.array([[-0.105, 0.0], [0.105, 0.0]])
+    got = covered(np.array([[-0.05, 0.09], [0.05, -0.09], [0.0, 0.09], [0.0, 0.0]]), c, np.full(2, 0.1))
+    assert got.tolist() == [True, True, False, False]
+
+
+@pytest.mark.parametrize("c, r, h", [
+    (cluster([0.0, -0.875], 0.09, 0.06, np.pi / 2), 0.06, 0.25),
+    (random_drop(core.circle_room(), np.full(10, 0.1), np.random.default_rng(132)), 0.1, 0.02),
+])
+def test_the_limit_of_a_scene_mirrored_is_the_same(c, r, h):
+    """The rows are symmetric about y = 0 and pieces are joined the same going up or down: the
+    scene mirrored top to bottom or left to right has the same raw and pruned residuals. (In
+    the drop a piece parts in two going up, one arm without a disc: joining only the first
+    arm to it, or dropping the top row, changed one side's values.)"""
+    raw, pruned = limit_residual(c, r, h=h)
+    assert raw > 0.01 * OBJ
+    for flip in ([1.0, -1.0], [-1.0, 1.0]):
+        assert limit_residual(c * flip, r, h=h) == pytest.approx((raw, pruned), rel=1e-9, abs=1e-15)
+
+
+def test_a_disc_and_its_tangent_turn_a_corner_where_they_touch():
+    """A disc of 0.1 m at the origin and lines touching its right half at 30 and 80 degrees
+    (y = 0.05, 0.0985): a segment between the disc's right half (1) and the room's right half
+    (5) on one row and between the line and the room on the next is one piece turning round
+    the point of contact if the rows hold it, even where the disc does not reach the upper row."""
+    from testbed.studies.limit import _corner, _Curves
+
+    a = np.radians([30.0, 80.0])
+    lines = np.column_stack([np.cos(a), np.sin(a), np.full(2, 0.1)])
+    curves = _Curves(np.zeros((1, 2)), np.array([0.1]), lines, 1.0)
+    assert curves.contact_y(1, 6) == pytest.approx(0.05) and curves.contact_y(7, 1) == pytest.approx(0.1 * np.sin(a[1]))
+    assert _corner((1, 5), (6, 5), 0.04, 0.06, curves)
+    assert _corner((6, 5), (1, 5), 0.06, 0.04, curves)
+    assert not _corner((1, 5), (6, 5), 0.06, 0.08, curves)        # touching below both rows
+    assert _corner((1, 5), (7, 5), 0.09, 0.105, curves)           # the disc ends below 0.105
+    assert not _corner((1, 5), (7, 5), 0.08, 0.09, curves)
+
+
+def test_no_corner_where_the_shared_curve_crosses_one_of_the_others():
+    """Lines x = 0.4 (2), 0.6 - y (3), 0.5 + 2 y (4), 0.5 - 2 y (5) and 0.6 + y (6); on the rows
+    y = -0.1 and 0.1 segments bounded on the left by 2. 3 and 6 cross at y = 0 right of 2: a
+    corner. 3 and 4 cross, but 4 crosses 2 too (y = -0.05), as 5 does (y = 0.05) with 6."""
+    from testbed.studies.limit import _corner, _Curves
+
+    lines = np.array([[1.0, 0.0, 0.4], [1.0, 1.0, 0.6], [1.0, -2.0, 0.5], [1.0, 2.0, 0.5], [1.0, -1.0, 0.6]])
+    curves = _Curves(np.zeros((0, 2)), np.zeros(0), lines, 1.0)
+    assert _corner((2, 3), (2, 6), -0.1, 0.1, curves)
+    assert not _corner((2, 3), (2, 4), -0.1, 0.1, curves)
+    assert not _corner((2, 5), (2, 6), -0.1, 0.1, curves)
+
+
+def test_rows_pair_off_only_segment_by_segment_each_overlapping_its_partner_alone():
+    """_same_cells on hand-made segments ``[x0, x1, curves]`` of the rows y = -0.1 and 0.1 (the
+    curves of the test above): partners must overlap in x, may turn a corner (2, 3 then 2, 6),
+    and neither may overlap its neighbour's partner as well."""
+    from testbed.studies.limit import _Curves, _same_cells
+
+    lines = np.array([[1.0, 0.0, 0.4], [1.0, 1.0, 0.6], [1.0, -2.0, 0.5], [1.0, 2.0, 0.5], [1.0, -1.0, 0.6]])
+    curves = _Curves(np.zeros((0, 2)), np.zeros(0), lines, 1.0)
+
+    def same(a_row, b_row):
+        segs = a_row + b_row
+        return _same_cells(segs, list(range(len(a_row))), list(range(len(a_row), len(segs))), -0.1, 0.1, curves)
+
+    assert same([[0.4, 0.7, (2, 3)]], [[0.4, 0.5, (2, 3)]])
+    assert not same([[0.1, 0.2, (2, 3)]], [[0.3, 0.4, (2, 3)]])       # no overlap
+    assert same([[0.4, 0.7, (2, 3)]], [[0.4, 0.7, (2, 6)]])           # a corner
+    assert not same([[0.4, 0.7, (2, 3)]], [[0.4, 0.7, (2, 4)]])       # not a corner
+    pair = [(2, 3), (4, 5)]
+    assert same([[0.0, 0.1, pair[0]], [0.5, 0.6, pair[1]]], [[0.0, 0.3, pair[0]], [0.4, 0.6, pair[1]]])
+    assert not same([[0.0, 0.3, pair[0]], [0.5, 0.6, pair[1]]], [[0.0, 0.1, pair[0]], [0.2, 0.6, pair[1]]])
+    assert not same([[0.0, 0.1, pair[0]], [0.2, 0.6, pair[1]]], [[0.0, 0.3, pair[0]], [0.5, 0.6, pair[1]]])
