@@ -180,6 +180,17 @@ def test_a_piece_around_a_small_disc_keeps_it_though_the_rows_cross_the_disc_ins
     assert centre.area - np.pi * 0.01**2 > 0.05 * OBJ
 
 
+@pytest.mark.parametrize("r, y", [(0.0009, 0.0), (0.0009, 0.0004), (0.0002, 0.0004)])
+def test_a_disc_no_row_crosses_keeps_its_piece(r, y):
+    """A disc of radius under h / 2 = 1 mm in the three discs' centre piece, between the rows
+    y = -0.001 and 0.001: the piece holds a disc and stays when pieces below one 0.1 m disc's
+    area are pruned (the centre piece alone, about 0.1 object areas, goes)."""
+    c3 = 0.15 * np.array([[1.0, 0.0], [-0.5, 0.75**0.5], [-0.5, -0.75**0.5]])
+    alone = limit_residual(c3, 0.1, h=0.002, min_area=OBJ)[1]
+    pruned = limit_residual(np.vstack([c3, [[0.0, y]]]), np.array([0.1, 0.1, 0.1, r]), h=0.002, min_area=OBJ)[1]
+    assert pruned - alone > 0.05 * OBJ
+
+
 @pytest.mark.parametrize("c, h", [
     # the pieces between the discs are bounded by common tangents that also bound the discs' pieces
     ([[0.272, -0.154], [0.15, -0.352], [0.383, -0.359]], 0.002),

@@ -154,6 +154,19 @@ def limit_residual(
     first = np.cumsum([0] + [len(r) for r in rows])      # index of each row's first segment
     strips = [(ys[i], ys[i + 1], list(range(first[i], first[i + 1])), list(range(first[i + 1], first[i + 2])))
               for i in range(len(ys) - 1) if krow[i + 1] == krow[i] + 1]
+    # A disc between two rows crossing neither (radius under h / 2) still marks its piece:
+    # its strip is split by a row through its centre (connecting only, as refined rows do).
+    crossed = np.any(np.abs(ys[:, None] - centers[None, :, 1]) < radii[None, :], axis=0)
+    for yc in sorted(float(y) for y in centers[~crossed, 1]):
+        k = next((k for k, s in enumerate(strips) if s[0] < yc < s[1]), None)
+        if k is None:
+            continue
+        ya, yb, A, B = strips[k]
+        row = _row_segments(np.array([yc]), centers, radii, lines, room_radius, chunk)[0]
+        M = list(range(len(segs), len(segs) + len(row)))
+        segs.extend([*seg[:3], 0.0, 0.0, seg[5]] for seg in row)
+        parent.extend(M)
+        strips[k:k + 1] = [(ya, yc, A, M), (yc, yb, M, B)]
     for level in range(depth + 1):
         pending = []
         for ya, yb, A, B in strips:
