@@ -126,7 +126,8 @@ def limit_residual(
     # y-range can hold hull points.
     ks = np.arange(int(np.floor((-room_radius) / h)), int(np.ceil(room_radius / h)))
     ys = (ks + 0.5) * h
-    near = np.any(np.abs(ys[:, None] - centers[None, :, 1]) < radii[None, :], axis=1)
+    crosses = np.abs(ys[:, None] - centers[None, :, 1]) < radii[None, :]      # (rows, discs)
+    near = crosses.any(axis=1)
     ys, krow = ys[near], ks[near]
     if len(ys) == 0:
         return 0.0, 0.0
@@ -151,21 +152,24 @@ def limit_residual(
     def union(a, b):
         parent[find(a)] = find(b)
 
+    def add_row(row) -> list[int]:
+        """Add a row that connects only (the rows hold the area); its segments' indices."""
+        M = list(range(len(segs), len(segs) + len(row)))
+        segs.extend([*seg[:3], 0.0, 0.0, seg[5]] for seg in row)
+        parent.extend(M)
+        return M
+
     first = np.cumsum([0] + [len(r) for r in rows])      # index of each row's first segment
     strips = [(ys[i], ys[i + 1], list(range(first[i], first[i + 1])), list(range(first[i + 1], first[i + 2])))
               for i in range(len(ys) - 1) if krow[i + 1] == krow[i] + 1]
     # A disc between two rows crossing neither (radius under h / 2) still marks its piece:
     # its strip is split by a row through its centre (connecting only, as refined rows do).
-    crossed = np.any(np.abs(ys[:, None] - centers[None, :, 1]) < radii[None, :], axis=0)
-    for yc in sorted(float(y) for y in centers[~crossed, 1]):
+    for yc in sorted(float(y) for y in centers[~crosses.any(axis=0), 1]):
         k = next((k for k, s in enumerate(strips) if s[0] < yc < s[1]), None)
         if k is None:
             continue
         ya, yb, A, B = strips[k]
-        row = _row_segments(np.array([yc]), centers, radii, lines, room_radius, chunk)[0]
-        M = list(range(len(segs), len(segs) + len(row)))
-        segs.extend([*seg[:3], 0.0, 0.0, seg[5]] for seg in row)
-        parent.extend(M)
+        M = add_row(_row_segments(np.array([yc]), centers, radii, lines, room_radius, chunk)[0])
         strips[k:k + 1] = [(ya, yc, A, M), (yc, yb, M, B)]
     for level in range(depth + 1):
         pending = []
@@ -185,9 +189,7 @@ def limit_residual(
         mids = np.array([0.5 * (ya + yb) for ya, yb, _, _ in pending])
         strips = []
         for (ya, yb, A, B), row in zip(pending, _row_segments(mids, centers, radii, lines, room_radius, chunk)):
-            M = list(range(len(segs), len(segs) + len(row)))
-            segs.extend([*seg[:3], 0.0, 0.0, seg[5]] for seg in row)      # connect only: the rows hold the area
-            parent.extend(M)
+            M = add_row(row)
             strips += [(ya, 0.5 * (ya + yb), A, M), (0.5 * (ya + yb), yb, M, B)]
     residual: dict[int, float] = {}
     total: dict[int, float] = {}
